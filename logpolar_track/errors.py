@@ -1,0 +1,36 @@
+"""Exceptions raised by lptrack's library code.
+
+The library raises; only :mod:`logpolar_track.cli` turns these into one line on stderr and an exit code.
+Messages say what was expected, what was received and how to fix it.
+"""
+
+
+class LptrackError(Exception):
+    """Base class of every error lptrack raises on purpose."""
+
+    #: Exit code the CLI uses for this kind of error (1: runtime failure, 2: bad usage).
+    exit_code = 1
+
+
+class RoiError(LptrackError, ValueError):
+    """A ROI specification is malformed or does not fit the frame."""
+
+    exit_code = 2
+
+
+class VideoError(LptrackError):
+    """A video cannot be opened or read (missing, not a video, empty)."""
+
+    exit_code = 1
+
+
+class OutputError(LptrackError):
+    """An output cannot be written (folder missing or unwritable, file exists)."""
+
+    exit_code = 1
+
+
+class UsageError(LptrackError, ValueError):
+    """An argument has a value lptrack does not accept (unknown tracker, bad option value)."""
+
+    exit_code = 2

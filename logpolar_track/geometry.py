@@ -1,0 +1,204 @@
+"""Geometry of regions of interest: circles and ellipses in pixel coordinates.
+
+Conventions used everywhere in lptrack:
+
+* pixel coordinates, origin at the top-left corner of the frame, x to the right, y **down**;
+* angles in degrees, **counter-clockwise as seen on screen**. A direction at angle ``t`` therefore points
+  along ``(cos t, -sin t)`` in pixel coordinates (the minus because y grows downwards);
+* an ellipse is ``(cx, cy, a, b, angle_deg)`` with semi-axes ``a`` and ``b`` in pixels and ``angle_deg`` the
+  direction of axis ``a``; a circle is the ellipse with ``a == b``.
+
+This module needs no OpenCV.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import RoiError
+
+ROI_SYNTAX = "'cx,cy,r' (circle) or 'cx,cy,a,b,angle' (ellipse; pixels, angle in degrees counter-clockwise)"
+
+
+@dataclass(frozen=True)
+class Ellipse:
+    """An ellipse (or circle) in pixel coordinates.
+
+    Parameters
+    ----------
+    cx, cy : float
+        Centre in pixels (x right, y down, origin top-left).
+    a, b : float
+        Semi-axes in pixels, both > 0. ``a`` lies along ``angle_deg``.
+    angle_deg : float
+        Direction of axis ``a`` in degrees, counter-clockwise on screen from +x.
+    """
+
+    cx: float
+    cy: float
+    a: float
+    b: float
+    angle_deg: float = 0.0
+
+    @classmethod
+    def circle(cls, cx: float, cy: float, r: float) -> "Ellipse":
+        """The circle of radius ``r`` pixels centred on ``(cx, cy)``."""
+        return cls(cx, cy, r, r, 0.0)
+
+    @property
+    def is_circle(self) -> bool:
+        return math.isclose(self.a, self.b, rel_tol=1e-9)
+
+    @property
+    def centre(self) -> tuple[float, float]:
+        return (self.cx, self.cy)
+
+    @property
+    def radius(self) -> float:
+        """The larger semi-axis in pixels: the radius of the smallest circle around the ellipse."""
+        return max(self.a, self.b)
+
+    def moved(self, cx: float, cy: float, scale: float = 1.0, rotation_deg: float = 0.0) -> "Ellipse":
+        """This ellipse with a new centre, semi-axes multiplied by ``scale``, turned by ``rotation_deg`` (CCW)."""
+        return Ellipse(cx, cy, self.a * scale, self.b * scale, self.angle_deg + rotation_deg)
+
+    def axis_direction(self) -> tuple[float, float]:
+        """Unit vector of axis ``a`` in pixel coordinates (y down)."""
+        t = math.radians(self.angle_deg)
+        return (math.cos(t), -math.sin(t))
+
+    def axis_end(self) -> tuple[float, float]:
+        """Pixel position of the end of axis ``a`` (the tip of the drawn radius line)."""
+        ux, uy = self.axis_direction()
+        return (self.cx + self.a * ux, self.cy + self.a * uy)
+
+    def half_extents(self) -> tuple[float, float]:
+        """Half width and half height in pixels of the axis-aligned bounding box."""
+        t = math.radians(self.angle_deg)
+        c, s = math.cos(t), math.sin(t)
+        return (math.hypot(self.a * c, self.b * s), math.hypot(self.a * s, self.b * c))
+
+    def bounding_box(self) -> tuple[float, float, float, float]:
+        """Axis-aligned bounding box ``(x, y, w, h)`` in pixels, (x, y) the top-left corner."""
+        hw, hh = self.half_extents()
+        return (self.cx - hw, self.cy - hh, 2 * hw, 2 * hh)
+
+    def boundary_points(self, n: int = 64) -> np.ndarray:
+        """``n`` points on the outline as an ``(n, 2)`` float array of (x, y) pixels, counter-clockwise."""
+        t = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+        u, v = self.a * np.cos(t), self.b * np.sin(t)
+        psi = math.radians(self.angle_deg)
+        x = self.cx + u * math.cos(psi) - v * math.sin(psi)
+        y = self.cy - (u * math.sin(psi) + v * math.cos(psi))
+        return np.stack([x, y], axis=1)
+
+    def contains(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Boolean mask of which pixel positions ``(x, y)`` lie inside the ellipse."""
+        psi = math.radians(self.angle_deg)
+        dx, dy = np.asarray(x) - self.cx, -(np.asarray(y) - self.cy)  # to a y-up frame
+        u = dx * math.cos(psi) + dy * math.sin(psi)
+        v = -dx * math.sin(psi) + dy * math.cos(psi)
+        return (u / self.a) ** 2 + (v / self.b) ** 2 <= 1.0
+
+    def fraction_inside(self, width: int, height: int, samples: int = 41) -> float:
+        """Share of the ellipse's area that lies inside a ``width`` x ``height`` frame (0 to 1)."""
+        g = np.linspace(-1.0, 1.0, samples)
+        u, v = np.meshgrid(g * self.a, g * self.b)
+        inside = (u / self.a) ** 2 + (v / self.b) ** 2 <= 1.0
+        psi = math.radians(self.angle_deg)
+        x = self.cx + u * math.cos(psi) - v * math.sin(psi)
+        y = self.cy - (u * math.sin(psi) + v * math.cos(psi))
+        in_frame = (x >= -0.5) & (x <= width - 0.5) & (y >= -0.5) & (y <= height - 0.5)
+        return float((inside & in_frame).sum() / max(inside.sum(), 1))
+
+    def to_spec(self) -> str:
+        """This ROI in ``--roi`` syntax (``cx,cy,r`` for a circle)."""
+        if self.is_circle and self.angle_deg == 0.0:
+            return f"{_fmt(self.cx)},{_fmt(self.cy)},{_fmt(self.a)}"
+        return f"{_fmt(self.cx)},{_fmt(self.cy)},{_fmt(self.a)},{_fmt(self.b)},{_fmt(self.angle_deg)}"
+
+
+def _fmt(value: float) -> str:
+    return f"{value:.3f}".rstrip("0").rstrip(".")
+
+
+def parse_roi(spec: str) -> Ellipse:
+    """Parse a ROI given as ``cx,cy,r`` or ``cx,cy,a,b,angle``.
+
+    Parameters
+    ----------
+    spec : str
+        Comma-separated numbers (spaces allowed): centre and radius in pixels, or centre, semi-axes in pixels
+        and the angle of axis ``a`` in degrees counter-clockwise on screen.
+
+    Returns
+    -------
+    Ellipse
+
+    Raises
+    ------
+    RoiError
+        If the text has the wrong number of fields, a field is not a finite number, or a radius is not > 0.
+    """
+    text = str(spec).strip()
+    fields = [f.strip() for f in text.replace(";", ",").split(",")] if text else []
+    if len(fields) not in (3, 5):
+        raise RoiError(f"ROI '{spec}' has {len(fields)} number(s); expected {ROI_SYNTAX}")
+    try:
+        values = [float(f) for f in fields]
+    except ValueError:
+        raise RoiError(f"ROI '{spec}' is not a list of numbers; expected {ROI_SYNTAX}") from None
+    if not all(math.isfinite(v) for v in values):
+        raise RoiError(f"ROI '{spec}' contains a non-finite number; expected {ROI_SYNTAX}")
+    if len(values) == 3:
+        cx, cy, r = values
+        if r <= 0:
+            raise RoiError(f"ROI '{spec}': radius must be > 0 pixels, got {_fmt(r)}")
+        return Ellipse.circle(cx, cy, r)
+    cx, cy, a, b, angle = values
+    if a <= 0 or b <= 0:
+        raise RoiError(f"ROI '{spec}': semi-axes must be > 0 pixels, got a={_fmt(a)}, b={_fmt(b)}")
+    return Ellipse(cx, cy, a, b, angle)
+
+
+def check_roi_fits(roi: Ellipse, width: int, height: int, *, source: str = "the frame",
+                   min_inside: float = 0.5, min_radius: float = 2.0) -> None:
+    """Raise :class:`RoiError` unless ``roi`` is usable on a ``width`` x ``height`` frame.
+
+    A ROI may hang over the border (trackers pad the frame), but its centre must lie in the frame, at least
+    ``min_inside`` of its area must be inside, and its smaller semi-axis must be at least ``min_radius`` pixels.
+    """
+    where = f"the {width}x{height} frame of {source}"
+    if not (0 <= roi.cx < width and 0 <= roi.cy < height):
+        raise RoiError(f"ROI centre ({_fmt(roi.cx)}, {_fmt(roi.cy)}) lies outside {where}; "
+                       f"give a centre with 0 <= cx < {width} and 0 <= cy < {height}")
+    if min(roi.a, roi.b) < min_radius:
+        raise RoiError(f"ROI {roi.to_spec()} is too small to track: semi-axes must be >= {min_radius:g} pixels")
+    inside = roi.fraction_inside(width, height)
+    if inside < min_inside:
+        raise RoiError(f"ROI {roi.to_spec()} lies mostly outside {where} ({inside:.0%} inside); "
+                       f"at least {min_inside:.0%} of it must be in the frame")
+
+
+def ellipse_in_box(x: float, y: float, w: float, h: float) -> Ellipse:
+    """The ellipse inscribed in the axis-aligned box with top-left ``(x, y)`` and size ``w`` x ``h`` pixels."""
+    return Ellipse(x + w / 2.0, y + h / 2.0, w / 2.0, h / 2.0, 0.0)
+
+
+def ellipse_in_rotated_rect(cx: float, cy: float, w: float, h: float, angle_deg: float) -> Ellipse:
+    """The ellipse inscribed in a rotated rectangle.
+
+    ``w`` lies along ``angle_deg`` (degrees counter-clockwise on screen), ``h`` across it.
+    """
+    return Ellipse(cx, cy, w / 2.0, h / 2.0, angle_deg)
+
+
+def wrap_degrees(angle: float) -> float:
+    """``angle`` wrapped into (-180, 180] degrees."""
+    wrapped = math.fmod(angle + 180.0, 360.0)
+    if wrapped <= 0:
+        wrapped += 360.0
+    return wrapped - 180.0

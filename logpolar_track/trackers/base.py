@@ -1,0 +1,159 @@
+"""The one interface every tracker shares, and the registry that names them.
+
+Shaped like OpenCV's ``Tracker``: ``init(frame, roi)`` once, then ``update(frame) -> (ok, state)`` per frame.
+Frames are decoded BGR (or grey) uint8 arrays and are never modified. ``ok=False`` means "not found in this
+frame" -- data, not an error -- and ``state`` then holds the last good geometry.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import Callable, ClassVar
+
+import numpy as np
+
+from ..errors import UsageError
+from ..geometry import Ellipse
+from ..logpolar import to_gray
+
+
+@dataclass(frozen=True)
+class TrackState:
+    """Where the object is in one frame.
+
+    Attributes
+    ----------
+    ellipse : Ellipse
+        Current outline in pixels; its ``angle_deg`` is the initial angle plus ``rotation_deg``.
+    scale : float
+        Size relative to the initial ROI (1.0 at init).
+    rotation_deg : float or None
+        Cumulative (unwrapped) counter-clockwise rotation since init, in degrees; ``None`` for trackers that
+        cannot measure rotation (OpenCV's).
+    score : float
+        Match confidence in [0, 1].
+    """
+
+    ellipse: Ellipse
+    scale: float
+    rotation_deg: float | None
+    score: float
+
+    @property
+    def centre(self) -> tuple[float, float]:
+        return self.ellipse.centre
+
+
+class Tracker(ABC):
+    """Interface of every tracker: ``init`` on a frame and a ROI, then ``update`` on each following frame."""
+
+    #: Registry name, used by ``--tracker`` and ``lptrack bench``.
+    name: ClassVar[str] = ""
+    #: One line for ``--help`` and tables.
+    summary: ClassVar[str] = ""
+    #: Whether ``rotation_deg`` is measured.
+    measures_rotation: ClassVar[bool] = True
+
+    @abstractmethod
+    def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
+        """Start tracking the object inside ``roi`` on ``frame``; returns the initial state (score 1)."""
+
+    @abstractmethod
+    def update(self, frame: np.ndarray) -> tuple[bool, TrackState]:
+        """Find the object in the next ``frame``; ``ok`` is False when it is lost (state = last good)."""
+
+
+@dataclass(frozen=True)
+class Similarity:
+    """A tracker's raw estimate for one frame: centre (pixels), scale, cumulative rotation (deg CCW), score."""
+
+    cx: float
+    cy: float
+    scale: float
+    rotation_deg: float
+    score: float
+
+
+class SimilarityTracker(Tracker):
+    """Shared bookkeeping of lptrack's own trackers, which estimate a similarity transform per frame.
+
+    Subclasses implement :meth:`_start` and :meth:`_estimate` on a float32 grey frame; this class turns their
+    estimates into :class:`TrackState`, marks frames whose score is below ``lost_threshold`` as lost, and keeps
+    the last good state for them.
+    """
+
+    def __init__(self, *, lost_threshold: float):
+        self.lost_threshold = float(lost_threshold)
+        self.roi: Ellipse | None = None
+        self.last: Similarity | None = None
+
+    def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
+        self.roi = roi
+        self.last = Similarity(roi.cx, roi.cy, 1.0, 0.0, 1.0)
+        self._start(to_gray(frame), roi)
+        return self._state(self.last)
+
+    def update(self, frame: np.ndarray) -> tuple[bool, TrackState]:
+        if self.last is None:
+            raise RuntimeError("update() called before init()")
+        estimate = self._estimate(to_gray(frame), self.last)
+        ok = estimate is not None and estimate.score >= self.lost_threshold and _finite(estimate)
+        if ok:
+            self.last = estimate
+            self._accept(estimate)
+            return True, self._state(estimate)
+        score = 0.0 if estimate is None or not math.isfinite(estimate.score) else estimate.score
+        return False, self._state(self.last, score=score)
+
+    def _state(self, sim: Similarity, score: float | None = None) -> TrackState:
+        ellipse = self.roi.moved(sim.cx, sim.cy, sim.scale, sim.rotation_deg)
+        return TrackState(ellipse, sim.scale, sim.rotation_deg, float(sim.score if score is None else score))
+
+    @abstractmethod
+    def _start(self, gray: np.ndarray, roi: Ellipse) -> None:
+        """Build the appearance model from the first frame (float32 grey)."""
+
+    @abstractmethod
+    def _estimate(self, gray: np.ndarray, last: Similarity) -> Similarity | None:
+        """Estimate the object's similarity in ``gray`` starting from the last good estimate."""
+
+    def _accept(self, estimate: Similarity) -> None:
+        """Hook called with every estimate accepted as tracked (e.g. to update a template)."""
+
+
+def _finite(sim: Similarity) -> bool:
+    return all(math.isfinite(v) for v in (sim.cx, sim.cy, sim.scale, sim.rotation_deg)) and sim.scale > 0
+
+
+_REGISTRY: dict[str, Callable[..., Tracker]] = {}
+
+
+def register(cls):
+    """Class decorator adding a tracker to the registry under ``cls.name``."""
+    if not cls.name or cls.name in _REGISTRY:
+        raise ValueError(f"tracker name {cls.name!r} missing or already registered")
+    _REGISTRY[cls.name] = cls
+    return cls
+
+
+def tracker_names(*, include_unavailable: bool = False) -> list[str]:
+    """Registered tracker names, in registration order (lptrack's own first)."""
+    return [name for name, cls in _REGISTRY.items() if include_unavailable or getattr(cls, "available", lambda: True)()]
+
+
+def tracker_class(name: str):
+    """The registered class (or factory) called ``name``."""
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        raise UsageError(f"unknown tracker '{name}'; choose one of: {', '.join(tracker_names())}") from None
+
+
+def create_tracker(name: str, **params) -> Tracker:
+    """A new tracker of the registered kind ``name`` with keyword tuning ``params``."""
+    cls = tracker_class(name)
+    if not getattr(cls, "available", lambda: True)():
+        raise UsageError(f"tracker '{name}' is not available here: {cls.unavailable_reason()}")
+    return cls(**params)

@@ -1,0 +1,318 @@
+"""The one place that joins reader -> tracker -> drawing -> writers for one video.
+
+:func:`track_video` yields a :class:`~logpolar_track.results.FrameResult` per frame (a library call, no
+files written); :func:`run_video` does what ``lptrack run`` does: tracks, writes the annotated video and the
+CSV atomically, and returns a :class:`RunSummary`.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Iterator, Union
+
+import numpy as np
+
+from .draw import draw_state
+from .errors import OutputError, RoiError, UsageError
+from .geometry import ROI_SYNTAX, Ellipse, check_roi_fits, parse_roi
+from . import trackers as _trackers
+from .results import CsvWriter, FrameResult
+from .trackers import Tracker, create_tracker
+from .video import CODECS_BY_EXTENSION, VideoReader, VideoWriter, check_output_path
+
+#: Tracker used when none is named: the registry's choice (``trackers.DEFAULT_TRACKER``) when it makes one,
+#: else ``fixed``. Read from one place so the CLI, the docs and the library agree.
+DEFAULT_TRACKER: str = getattr(_trackers, "DEFAULT_TRACKER", "fixed")
+
+#: Suffixes appended to the video's stem for the default output names.
+VIDEO_OUT_SUFFIX = ".lptrack.mp4"
+CSV_OUT_SUFFIX = ".lptrack.csv"
+
+RoiLike = Union[Ellipse, str, None]
+ProgressLike = Union[bool, Callable[[int, "int | None"], None], None]
+
+
+def default_outputs(video_path, folder=".") -> tuple[Path, Path]:
+    """Default ``(video_out, csv_out)`` for ``video_path``: ``<stem>.lptrack.mp4`` / ``.csv`` in ``folder``."""
+    stem = Path(video_path).stem
+    folder = Path(folder)
+    return folder / f"{stem}{VIDEO_OUT_SUFFIX}", folder / f"{stem}{CSV_OUT_SUFFIX}"
+
+
+def roi_sidecar_paths(video_path) -> list[Path]:
+    """Where an initial-ROI sidecar of ``video_path`` may be: ``<stem>.roi``, then ``<file name>.roi``."""
+    video_path = Path(video_path)
+    return [video_path.with_suffix(".roi"), video_path.with_name(video_path.name + ".roi")]
+
+
+def read_roi_sidecar(video_path) -> Ellipse | None:
+    """The initial ROI stored next to a video, or None if there is no sidecar.
+
+    The sidecar is ``<folder>/<stem>.roi`` (e.g. ``spin.roi`` for ``spin.mp4``) or ``<video file name>.roi``
+    (``spin.mp4.roi``): one line in ``--roi`` syntax; blank lines and lines starting with ``#`` are ignored.
+
+    Raises
+    ------
+    RoiError
+        If a sidecar exists but does not hold a valid ROI (the message names the file).
+    """
+    for candidate in roi_sidecar_paths(video_path):
+        if not candidate.is_file():
+            continue
+        try:
+            text = candidate.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise RoiError(f"cannot read ROI file '{candidate}': {exc}") from None
+        lines = [ln.strip() for ln in text.splitlines() if ln.strip() and not ln.strip().startswith("#")]
+        if not lines:
+            raise RoiError(f"ROI file '{candidate}' is empty; write one line {ROI_SYNTAX}")
+        try:
+            return parse_roi(lines[0])
+        except RoiError as exc:
+            raise RoiError(f"ROI file '{candidate}': {exc}") from None
+    return None
+
+
+def _resolve_roi(roi: RoiLike, video_path) -> Ellipse:
+    if isinstance(roi, Ellipse):
+        return roi
+    if roi is not None:
+        return parse_roi(roi)
+    found = read_roi_sidecar(video_path)
+    if found is None:
+        names = " or ".join(f"'{p.name}'" for p in roi_sidecar_paths(video_path))
+        raise UsageError(f"no ROI given for '{video_path}': give --roi {ROI_SYNTAX}, or put one such line "
+                         f"in {names} next to the video")
+    return found
+
+
+def _make_tracker(tracker: str | Tracker, params: dict | None) -> Tracker:
+    if isinstance(tracker, Tracker):
+        if params:
+            raise UsageError("tracker_params apply only when the tracker is given by name")
+        return tracker
+    try:
+        return create_tracker(str(tracker), **(params or {}))
+    except TypeError as exc:  # an unknown keyword in params
+        raise UsageError(f"bad parameters for tracker '{tracker}': {exc}") from None
+
+
+def _track(reader: VideoReader, roi: Ellipse, tracker: Tracker) -> Iterator[tuple[np.ndarray, FrameResult]]:
+    """Core loop shared by :func:`track_video` and :func:`run_video`: yields ``(frame, result)``."""
+    check_roi_fits(roi, reader.width, reader.height, source=reader.path.name)
+    frames = iter(reader)
+    index, t, frame = next(frames)
+    yield frame, FrameResult(index, t, tracker.init(frame, roi), "init")
+    for index, t, frame in frames:
+        ok, state = tracker.update(frame)
+        yield frame, FrameResult(index, t, state, "tracked" if ok else "lost")
+
+
+def track_video(path, roi: RoiLike = None, tracker: str | Tracker = DEFAULT_TRACKER, *, start_frame: int = 0,
+                tracker_params: dict | None = None) -> Iterator[FrameResult]:
+    """Track one object through a video; yields one :class:`FrameResult` per frame, the first with status
+    ``init``.
+
+    Parameters
+    ----------
+    path : str or Path
+        Video file.
+    roi : Ellipse or str, optional
+        The object on the start frame: an :class:`Ellipse`, or text ``cx,cy,r`` / ``cx,cy,a,b,angle``
+        (pixels; angle in degrees counter-clockwise on screen). If None, read from the video's ``.roi``
+        sidecar (:func:`read_roi_sidecar`).
+    tracker : str or Tracker
+        A registered tracker name (:func:`~logpolar_track.trackers.tracker_names`) or a Tracker instance.
+    start_frame : int
+        Index of the frame the ROI is drawn on; tracking starts there. ``FrameResult.frame`` counts from the
+        start of the file.
+    tracker_params : dict, optional
+        Keyword tuning parameters for a tracker given by name.
+
+    Raises
+    ------
+    UsageError
+        Unknown tracker, bad tracker parameters, or no ROI and no sidecar.
+    RoiError
+        Malformed ROI, or one that does not fit the frame (centre outside, mostly outside, too small).
+    VideoError
+        Missing file, not a video, no frames, start frame past the end.
+
+    Notes
+    -----
+    A generator: nothing is opened until the first result is requested, and the video is released when the
+    generator is closed or exhausted.
+    """
+    engine = _make_tracker(tracker, tracker_params)
+    with VideoReader(path, start_frame=start_frame) as reader:
+        for _, result in _track(reader, _resolve_roi(roi, path), engine):
+            yield result
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """What :func:`run_video` did.
+
+    Attributes
+    ----------
+    video : Path
+        Input video.
+    tracker : str
+        Tracker name.
+    frames, lost : int
+        Frames processed (including the init frame) and how many of them were lost.
+    start_frame : int
+    processing_fps : float
+        Frames per second of the whole loop (decode, track, draw, write), wall clock.
+    seconds : float
+        Wall-clock time of the loop.
+    video_fps : float
+        The input's frame rate (also the output's); ``video_fps_guessed`` if the container reported none.
+    width, height : int
+        Frame size in pixels.
+    video_out : Path or None
+        Annotated video actually written (its extension may differ from the one asked for if a fallback
+        codec was needed).
+    fourcc : str or None
+        Codec of ``video_out``.
+    csv_out : str or None
+        CSV path, ``'-'`` for stdout, or None.
+    """
+
+    video: Path
+    tracker: str
+    frames: int
+    lost: int
+    start_frame: int
+    processing_fps: float
+    seconds: float
+    video_fps: float
+    video_fps_guessed: bool
+    width: int
+    height: int
+    video_out: Path | None
+    fourcc: str | None
+    csv_out: str | None
+
+
+def _no_op() -> None:
+    pass
+
+
+def _progress_callback(progress: ProgressLike, total: int | None):
+    """(callback(done, total), finish()) for ``progress``: a callable, True (tqdm bar on stderr) or off."""
+    if callable(progress):
+        return (lambda done: progress(done, total)), _no_op
+    if not progress:
+        return (lambda done: None), _no_op
+    from tqdm import tqdm
+
+    bar = tqdm(total=total, unit="frame", file=sys.stderr, dynamic_ncols=True, leave=False,
+               desc="lptrack")
+
+    def update(done: int) -> None:
+        bar.update(done - bar.n)
+
+    return update, bar.close
+
+
+def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> None:
+    """Raise before any work if an output cannot be written (see :func:`run_video`)."""
+    planned = []
+    if video_out is not None:
+        if Path(video_out).suffix.lower() not in CODECS_BY_EXTENSION:
+            raise UsageError(f"cannot write video '{video_out}': unsupported extension "
+                             f"'{Path(video_out).suffix}'; use one of {', '.join(CODECS_BY_EXTENSION)}")
+        planned.append((Path(video_out), "output video"))
+    if csv_out is not None and str(csv_out) != "-":
+        planned.append((Path(csv_out), "output CSV"))
+    for out, what in planned:
+        check_output_path(out, overwrite=overwrite, what=what)
+        if out.exists() and out.resolve() == video_path.resolve():
+            raise OutputError(f"{what} '{out}' is the input video; choose another name")
+    if len(planned) == 2 and planned[0][0].resolve() == planned[1][0].resolve():
+        raise OutputError(f"the output video and the output CSV are the same file '{planned[0][0]}'")
+
+
+def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRACKER, start_frame: int = 0,
+              video_out=None, csv_out=None, overwrite: bool = False, progress: ProgressLike = False,
+              tracker_params: dict | None = None) -> RunSummary:
+    """Track one object through ``path`` and write the annotated video and/or the per-frame CSV.
+
+    Parameters
+    ----------
+    path, roi, tracker, start_frame, tracker_params
+        As in :func:`track_video`.
+    video_out : str or Path, optional
+        Annotated video to write (same size, frame count and frame rate as the input); None for none.
+    csv_out : str or Path, optional
+        CSV to write (:data:`~logpolar_track.results.COLUMNS`); ``'-'`` for stdout; None for none.
+    overwrite : bool
+        Replace existing outputs. Otherwise an existing output raises :class:`OutputError` before any work.
+    progress : bool or callable
+        True: a tqdm bar on stderr. A callable is called as ``progress(frames_done, total)`` after each
+        frame (``total`` is the container's estimate of the remaining frames, or None).
+
+    Returns
+    -------
+    RunSummary
+
+    Raises
+    ------
+    UsageError, RoiError, VideoError
+        As :func:`track_video`; all before any output file is created.
+    OutputError
+        Output folder missing or unwritable, output exists without ``overwrite``, output is the input, or
+        writing failed. Nothing half-written is left behind: outputs go to temporary names in their folders
+        and are renamed only when complete; on any error (or Ctrl-C) they are deleted.
+    """
+    engine = _make_tracker(tracker, tracker_params)
+    tracker_name = engine.name or type(engine).__name__
+    video_path = Path(path)
+    with VideoReader(video_path, start_frame=start_frame) as reader:
+        ellipse = _resolve_roi(roi, video_path)
+        check_roi_fits(ellipse, reader.width, reader.height, source=video_path.name)
+        # Inputs are checked (above) before outputs, outputs before any frame is tracked or written.
+        _check_outputs(video_path, video_out, csv_out, overwrite)
+        total = max(reader.frame_count - start_frame, 0) or None
+        csv_writer = video_writer = None
+        finish = _no_op
+        frames = lost = 0
+        try:
+            if csv_out is not None:
+                csv_writer = CsvWriter(csv_out, overwrite=overwrite)
+            if video_out is not None:
+                video_writer = VideoWriter(video_out, reader.fps, overwrite=overwrite)
+            step, finish = _progress_callback(progress, total)
+            started = time.perf_counter()
+            for frame, result in _track(reader, ellipse, engine):
+                if csv_writer is not None:
+                    csv_writer.write(result)
+                if video_writer is not None:
+                    video_writer.write(draw_state(frame, result.state, frame_index=result.frame,
+                                                  status=result.status))
+                frames += 1
+                lost += result.lost
+                step(frames)
+            seconds = time.perf_counter() - started
+            written = video_writer.close() if video_writer is not None else None
+            if csv_writer is not None:
+                csv_writer.close()
+        except BaseException:
+            # Ctrl-C and failures alike: delete temporary outputs, keep nothing half-written.
+            if video_writer is not None:
+                video_writer.abort()
+            if csv_writer is not None:
+                csv_writer.abort()
+            raise
+        finally:
+            finish()
+    return RunSummary(
+        video=video_path, tracker=tracker_name, frames=frames, lost=lost, start_frame=start_frame,
+        processing_fps=frames / seconds if seconds > 0 else float("inf"), seconds=seconds,
+        video_fps=reader.fps, video_fps_guessed=reader.fps_guessed, width=reader.width, height=reader.height,
+        video_out=written, fourcc=video_writer.fourcc if video_writer is not None else None,
+        csv_out=None if csv_writer is None else csv_writer.target)

@@ -1,0 +1,223 @@
+"""The per-frame results of a run and the CSV they are written as (the schema is a contract: append-only).
+
+One row per frame, columns :data:`COLUMNS`:
+
+=============  =======================================================================================
+frame          frame index in the video file (0 = first frame of the file, not of the run)
+time_s         nominal time of the frame in seconds, ``frame / fps``
+cx, cy         centre in pixels (x right, y down, origin at the top-left corner of the frame)
+a, b           semi-axes of the tracked ellipse in pixels (the initial ROI's times ``scale``)
+angle_deg      direction of axis ``a`` in degrees counter-clockwise on screen: the initial ROI's angle plus
+               ``rotation_deg`` (not wrapped). For trackers that do not measure rotation it stays the
+               initial angle.
+scale          size relative to the first row (1 in the first row)
+rotation_deg   cumulative (unwrapped) counter-clockwise rotation since the first row, in degrees; **empty**
+               for trackers that do not measure rotation
+score          match confidence in [0, 1]
+status         ``init`` (first row), ``tracked`` or ``lost`` (not found: the geometry is the last good one)
+=============  =======================================================================================
+
+Numbers have fixed decimals (coordinates and angles 3, scale 5, score 4, time 6), so the same run always
+writes the same bytes.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO
+
+from .errors import OutputError
+from .trackers.base import TrackState
+from .video import check_output_path, temporary_path
+
+#: The run CSV's columns, in order. A contract: never reorder or rename; only append.
+COLUMNS: tuple[str, ...] = ("frame", "time_s", "cx", "cy", "a", "b", "angle_deg", "scale", "rotation_deg",
+                            "score", "status")
+
+#: The values of the ``status`` column.
+STATUSES: tuple[str, ...] = ("init", "tracked", "lost")
+
+
+@dataclass(frozen=True)
+class FrameResult:
+    """What a run found in one frame.
+
+    Attributes
+    ----------
+    frame : int
+        Frame index in the video file (0 = its first frame).
+    time_s : float
+        Nominal time of the frame in seconds (``frame / fps``).
+    state : TrackState
+        The tracker's state: ellipse (pixels), scale (1 at init), rotation (deg CCW, cumulative, or None),
+        score in [0, 1]. For a lost frame, the last good geometry with this frame's score.
+    status : str
+        ``init``, ``tracked`` or ``lost``.
+    """
+
+    frame: int
+    time_s: float
+    state: TrackState
+    status: str
+
+    def __post_init__(self):
+        if self.status not in STATUSES:
+            raise ValueError(f"status must be one of {STATUSES}, got {self.status!r}")
+
+    @property
+    def lost(self) -> bool:
+        return self.status == "lost"
+
+
+def _number(value: float | None, decimals: int) -> str:
+    """``value`` with fixed ``decimals``; empty for None/NaN/inf; never ``-0.000``."""
+    if value is None or not math.isfinite(value):
+        return ""
+    text = f"{value:.{decimals}f}"
+    if text.startswith("-") and float(text) == 0.0:
+        text = text[1:]
+    return text
+
+
+def format_row(result: FrameResult, *, initial_angle_deg: float | None = None) -> list[str]:
+    """The CSV fields of ``result`` in :data:`COLUMNS` order, as strings.
+
+    Parameters
+    ----------
+    result : FrameResult
+    initial_angle_deg : float, optional
+        The initial ROI's angle in degrees. When the tracker does not measure rotation
+        (``state.rotation_deg is None``), ``angle_deg`` is written as this value and ``rotation_deg`` empty.
+        Without it, ``angle_deg`` comes from the state's ellipse.
+    """
+    state = result.state
+    e = state.ellipse
+    angle = e.angle_deg
+    if state.rotation_deg is None and initial_angle_deg is not None:
+        angle = initial_angle_deg
+    return [str(int(result.frame)), _number(result.time_s, 6),
+            _number(e.cx, 3), _number(e.cy, 3), _number(e.a, 3), _number(e.b, 3), _number(angle, 3),
+            _number(state.scale, 5), _number(state.rotation_deg, 3), _number(state.score, 4), result.status]
+
+
+def header_line() -> str:
+    """The CSV header line, newline included."""
+    return ",".join(COLUMNS) + "\n"
+
+
+def format_line(result: FrameResult, *, initial_angle_deg: float | None = None) -> str:
+    """One CSV line for ``result``, newline included."""
+    return ",".join(format_row(result, initial_angle_deg=initial_angle_deg)) + "\n"
+
+
+class CsvWriter:
+    """Writes run results as CSV to a file (atomically) or to stdout.
+
+    Parameters
+    ----------
+    target : str or Path
+        ``'-'`` for standard output, otherwise a file path.
+    overwrite : bool, optional
+        Replace an existing file; otherwise an existing file raises :class:`OutputError`.
+    stream : text stream, optional
+        Where ``'-'`` writes (default: ``sys.stdout`` at construction time).
+
+    Raises
+    ------
+    OutputError
+        If the folder is missing or unwritable, the file exists (without ``overwrite``), or writing fails.
+
+    Notes
+    -----
+    For a file, rows go to a hidden temporary file in the same folder (``.name.<pid>.part.csv``) that
+    :meth:`close` renames to ``target``; :meth:`abort`, or leaving a ``with`` block by an exception, deletes
+    it. The header is written at once. The ``angle_deg`` of trackers that do not measure rotation is the
+    first row's angle (see :func:`format_row`).
+    """
+
+    def __init__(self, target, *, overwrite: bool = False, stream: IO[str] | None = None):
+        self.to_stdout = str(target) == "-"
+        self.path: Path | None = None
+        self._temp: Path | None = None
+        self._initial_angle: float | None = None
+        self.rows = 0
+        self._closed = False
+        if self.to_stdout:
+            self._file = stream if stream is not None else sys.stdout
+        else:
+            self.path = check_output_path(target, overwrite=overwrite, what="output CSV")
+            self._temp = temporary_path(self.path)
+            try:
+                self._file = open(self._temp, "w", encoding="utf-8", newline="")
+            except OSError as exc:
+                raise OutputError(f"cannot write output CSV '{self.path}': {exc.strerror or exc}") from None
+        self._emit(header_line())
+
+    @property
+    def target(self) -> str:
+        """``'-'`` or the final file path as text."""
+        return "-" if self.to_stdout else str(self.path)
+
+    def __enter__(self) -> "CsvWriter":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
+
+    def _emit(self, text: str) -> None:
+        if self.to_stdout:
+            self._file.write(text)  # a closed pipe (BrokenPipeError) is the caller's to handle
+            return
+        try:
+            self._file.write(text)
+        except OSError as exc:
+            self.abort()
+            raise OutputError(f"cannot write output CSV '{self.path}': {exc.strerror or exc}") from None
+
+    def write(self, result: FrameResult) -> None:
+        """Append the row of one frame."""
+        if self._closed:
+            raise RuntimeError("CsvWriter is closed")
+        if self.rows == 0:
+            self._initial_angle = result.state.ellipse.angle_deg
+        self._emit(format_line(result, initial_angle_deg=self._initial_angle))
+        self.rows += 1
+
+    def close(self) -> None:
+        """Finish: flush stdout, or close the temporary file and rename it to the target path."""
+        if self._closed:
+            return
+        self._closed = True
+        if self.to_stdout:
+            self._file.flush()
+            return
+        try:
+            self._file.close()
+            os.replace(self._temp, self.path)
+        except OSError as exc:
+            self._temp.unlink(missing_ok=True)
+            raise OutputError(f"cannot write output CSV '{self.path}': {exc.strerror or exc}") from None
+
+    def abort(self) -> None:
+        """Stop and delete the temporary file (stdout is only flushed). Safe to call more than once."""
+        if self.to_stdout:
+            self._closed = True
+            try:
+                self._file.flush()
+            except (OSError, ValueError):
+                pass
+            return
+        self._closed = True
+        try:
+            self._file.close()
+        except OSError:
+            pass  # the file is deleted next anyway
+        if self._temp is not None:
+            self._temp.unlink(missing_ok=True)

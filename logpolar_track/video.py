@@ -1,0 +1,392 @@
+"""Reading and writing videos with OpenCV, without surprises.
+
+:class:`VideoReader` iterates ``(index, time_s, frame)`` over a video file, decoding a few frames ahead in a
+background thread so that decoding overlaps tracking. :class:`VideoWriter` opens on the first frame, tries
+codecs in order and says which one it used, and writes to a temporary name that is renamed only when the
+video is complete -- a killed run never leaves a file that looks finished.
+
+Frames are BGR ``uint8`` arrays of shape ``(height, width, 3)`` as OpenCV decodes them. Frame indexes count
+from 0 at the first frame of the file; ``time_s = index / fps`` (the nominal time of a constant-rate video).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+# FFmpeg's own messages ("moov atom not found") would bury ours; must be set before cv2 is imported.
+os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
+
+import queue  # noqa: E402
+import threading  # noqa: E402
+from pathlib import Path  # noqa: E402
+from typing import Iterator  # noqa: E402
+
+import cv2  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .errors import OutputError, VideoError  # noqa: E402
+
+#: Frame rate assumed when a container reports none (0 or NaN), in frames per second.
+FALLBACK_FPS = 25.0
+
+#: Codecs tried for each output extension, in order: (fourcc, extension actually written).
+#: mp4v in .mp4/.mov plays almost everywhere; MJPG in .avi reads back frame-exact, so it is the last resort.
+CODECS_BY_EXTENSION: dict[str, tuple[tuple[str, str], ...]] = {
+    ".mp4": (("mp4v", ".mp4"), ("MJPG", ".avi")),
+    ".m4v": (("mp4v", ".m4v"), ("MJPG", ".avi")),
+    ".mov": (("mp4v", ".mov"), ("MJPG", ".avi")),
+    ".avi": (("MJPG", ".avi"), ("XVID", ".avi")),
+    ".mkv": (("mp4v", ".mkv"), ("MJPG", ".mkv"), ("MJPG", ".avi")),
+    ".webm": (("VP80", ".webm"), ("MJPG", ".avi")),
+}
+
+_END = object()  # end-of-stream marker in the read-ahead queue
+
+
+def _check_input_path(path: Path) -> None:
+    if not path.exists():
+        raise VideoError(f"video '{path}' not found; give the path of a video file OpenCV can read "
+                         f"(e.g. .mp4, .avi, .mov)")
+    if path.is_dir():
+        raise VideoError(f"'{path}' is a folder, not a video file")
+    if not os.access(path, os.R_OK):
+        raise VideoError(f"video '{path}' is not readable (permission denied)")
+    if path.stat().st_size == 0:
+        raise VideoError(f"video '{path}' is empty (0 bytes); it contains no frames")
+
+
+def _open_capture(path: Path) -> cv2.VideoCapture:
+    """OpenCV's capture for ``path`` (one seam, so tests can stand in for odd containers)."""
+    return cv2.VideoCapture(str(path))
+
+
+class VideoReader:
+    """Frames of a video file as ``(index, time_s, frame)``, decoded ahead in a background thread.
+
+    Parameters
+    ----------
+    path : str or Path
+        Video file; anything OpenCV's FFmpeg backend decodes.
+    start_frame : int, optional
+        Index of the first frame to deliver (0 = first frame of the file). Earlier frames are decoded and
+        dropped, which is exact where container seeking is not.
+    read_ahead : int, optional
+        How many decoded frames may wait in the queue (memory is bounded to about this many frames).
+
+    Attributes
+    ----------
+    path : Path
+    fps : float
+        Frames per second as the container reports it, never rounded; :data:`FALLBACK_FPS` if it reports
+        0 or NaN (then ``fps_guessed`` is True).
+    fps_guessed : bool
+    frame_count : int
+        Frame count the container reports; may be approximate, and 0 when unknown.
+    width, height : int
+        Frame size in pixels, from the first decoded frame.
+
+    Raises
+    ------
+    VideoError
+        If the file is missing, not a video, contains no frames, or ``start_frame`` lies past its end.
+
+    Notes
+    -----
+    Use as a context manager (or call :meth:`close`) so the decoding thread stops and the file is released.
+    A reader can be iterated once.
+    """
+
+    def __init__(self, path, *, start_frame: int = 0, read_ahead: int = 4):
+        self.path = Path(path)
+        if start_frame < 0:
+            raise VideoError(f"start frame must be >= 0, got {start_frame}")
+        self.start_frame = int(start_frame)
+        self._read_ahead = max(1, int(read_ahead))
+        _check_input_path(self.path)
+        self._cap = _open_capture(self.path)
+        if not self._cap.isOpened():
+            self._cap.release()
+            raise VideoError(f"cannot read '{self.path}' as a video: OpenCV cannot decode it "
+                             f"(not a video, or a format this OpenCV build does not support)")
+        fps = float(self._cap.get(cv2.CAP_PROP_FPS) or 0.0)
+        self.fps_guessed = not (math.isfinite(fps) and fps > 0)
+        self.fps = FALLBACK_FPS if self.fps_guessed else fps
+        count = self._cap.get(cv2.CAP_PROP_FRAME_COUNT)
+        self.frame_count = int(count) if math.isfinite(count) and count > 0 else 0
+        # Skip to the start frame by decoding: exact, unlike CAP_PROP_POS_FRAMES on inter-coded streams.
+        for skipped in range(self.start_frame):
+            if not self._cap.grab():
+                self._cap.release()
+                if skipped == 0:
+                    raise VideoError(f"video '{self.path}' contains no frames")
+                raise VideoError(f"start frame {self.start_frame} lies past the end of '{self.path}', "
+                                 f"which has {skipped} frames; give a start frame from 0 to {skipped - 1}")
+        ok, first = self._cap.read()
+        if not ok or first is None or first.size == 0:
+            self._cap.release()
+            if self.start_frame == 0:
+                raise VideoError(f"video '{self.path}' contains no frames (empty or unreadable video)")
+            raise VideoError(f"start frame {self.start_frame} lies past the end of '{self.path}', "
+                             f"which has {self.start_frame} frames; give a start frame from 0 "
+                             f"to {self.start_frame - 1}")
+        self.first_frame: np.ndarray = first
+        self.height, self.width = first.shape[:2]
+        self._queue: queue.Queue = queue.Queue(maxsize=self._read_ahead)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._iterated = False
+        self._closed = False
+
+    # -- context manager -------------------------------------------------------------------------------
+    def __enter__(self) -> "VideoReader":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return (f"VideoReader('{self.path}', {self.width}x{self.height}, fps={self.fps:g}, "
+                f"frame_count={self.frame_count}, start_frame={self.start_frame})")
+
+    # -- reading ---------------------------------------------------------------------------------------
+    def time_of(self, index: int) -> float:
+        """Nominal time in seconds of frame ``index`` (``index / fps``)."""
+        return index / self.fps
+
+    def __iter__(self) -> Iterator[tuple[int, float, np.ndarray]]:
+        if self._iterated:
+            raise RuntimeError("a VideoReader can be iterated only once; open the video again")
+        if self._closed:
+            raise RuntimeError("VideoReader is closed")
+        self._iterated = True
+        return self._frames()
+
+    def _frames(self) -> Iterator[tuple[int, float, np.ndarray]]:
+        index = self.start_frame
+        first, self.first_frame = self.first_frame, None  # do not keep a frame alive for the whole run
+        yield index, self.time_of(index), first
+        if self._closed:
+            return
+        self._thread = threading.Thread(target=self._decode, name=f"lptrack-read-{self.path.name}",
+                                        daemon=True)
+        self._thread.start()
+        while True:
+            item = self._queue.get()
+            if item is _END:
+                return
+            if isinstance(item, BaseException):
+                raise VideoError(f"reading '{self.path}' failed after frame {index}: {item}") from item
+            index += 1
+            yield index, self.time_of(index), item
+
+    def _decode(self) -> None:
+        """Background thread: decode frames into the bounded queue until the end or :meth:`close`."""
+        try:
+            while not self._stop.is_set():
+                ok, frame = self._cap.read()  # releases the GIL while FFmpeg decodes
+                if not ok or frame is None:
+                    break
+                if not self._put(frame):
+                    return
+        except Exception as exc:  # noqa: BLE001 - handed to the consumer, which raises it as a VideoError
+            self._put(exc)
+            return
+        self._put(_END)
+
+    def _put(self, item) -> bool:
+        while not self._stop.is_set():
+            try:
+                self._queue.put(item, timeout=0.05)
+                return True
+            except queue.Full:
+                continue
+        return False
+
+    def close(self) -> None:
+        """Stop the decoding thread and release the file. Safe to call more than once."""
+        if self._closed:
+            return
+        self._closed = True
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        self._cap.release()
+        self.first_frame = None
+        # Drop frames still queued so their memory is freed now.
+        while True:
+            try:
+                self._queue.get_nowait()
+            except queue.Empty:
+                break
+
+
+def _fourcc_text(code: str) -> int:
+    return cv2.VideoWriter_fourcc(*code)
+
+
+def temporary_path(path: Path) -> Path:
+    """A hidden temporary name next to ``path`` that keeps its extension last (so OpenCV picks the container).
+
+    ``out/run.mp4`` -> ``out/.run.<pid>.part.mp4``. The process id keeps concurrent runs apart.
+    """
+    return path.with_name(f".{path.stem}.{os.getpid()}.part{path.suffix}")
+
+
+def check_output_path(path, *, overwrite: bool = False, what: str = "output") -> Path:
+    """Check that ``path`` can be written; return it as a :class:`Path`.
+
+    Raises
+    ------
+    OutputError
+        If its folder does not exist, is not a folder or is not writable, if ``path`` is a folder, or if
+        ``path`` exists and ``overwrite`` is False.
+    """
+    path = Path(path)
+    folder = path.parent
+    if not folder.exists():
+        raise OutputError(f"cannot write {what} '{path}': folder '{folder}' does not exist")
+    if not folder.is_dir():
+        raise OutputError(f"cannot write {what} '{path}': '{folder}' is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise OutputError(f"cannot write {what} '{path}': folder '{folder}' is not writable")
+    if path.is_dir():
+        raise OutputError(f"cannot write {what} '{path}': it is a folder")
+    if path.exists() and not overwrite:
+        raise OutputError(f"{what} '{path}' already exists; use --overwrite to replace it")
+    return path
+
+
+class VideoWriter:
+    """An annotated video written atomically, with codec fallback.
+
+    Parameters
+    ----------
+    path : str or Path
+        Wanted output file. Its extension chooses the codecs tried (:data:`CODECS_BY_EXTENSION`); if none of
+        them works the last fallback may write a different extension (e.g. ``.avi``): see :attr:`path`.
+    fps : float
+        Frame rate to record, in frames per second (pass the input's, unrounded).
+    overwrite : bool, optional
+        Replace an existing file. Otherwise an existing output raises :class:`OutputError`.
+
+    Attributes
+    ----------
+    path : Path
+        Where the finished video is (or will be) -- the wanted path unless a fallback changed the extension.
+    fourcc : str or None
+        Codec used, e.g. ``"mp4v"``; None until the first frame is written.
+    frames_written : int
+
+    Raises
+    ------
+    OutputError
+        From the constructor if the folder is missing/unwritable, the file exists (without ``overwrite``) or
+        the extension is not supported; from :meth:`write` if no codec can be opened or a frame has a
+        different size than the first.
+
+    Notes
+    -----
+    Frames go to a hidden temporary file in the same folder (:func:`temporary_path`), renamed to
+    :attr:`path` by :meth:`close`. :meth:`abort` (and leaving a ``with`` block by an exception) deletes it.
+    """
+
+    def __init__(self, path, fps: float, *, overwrite: bool = False):
+        wanted = Path(path)
+        suffix = wanted.suffix.lower()
+        if suffix not in CODECS_BY_EXTENSION:
+            raise OutputError(f"cannot write video '{wanted}': unsupported extension '{wanted.suffix}'; "
+                              f"use one of {', '.join(CODECS_BY_EXTENSION)}")
+        if not (math.isfinite(fps) and fps > 0):
+            raise OutputError(f"cannot write video '{wanted}': frame rate must be > 0, got {fps}")
+        self.path = check_output_path(wanted, overwrite=overwrite, what="output video")
+        self.wanted_path = self.path
+        self.fps = float(fps)
+        self.overwrite = overwrite
+        self.fourcc: str | None = None
+        self.frames_written = 0
+        self.size: tuple[int, int] | None = None
+        self._writer = None
+        self._temp: Path | None = None
+        self._closed = False
+
+    def __enter__(self) -> "VideoWriter":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
+
+    def _open(self, width: int, height: int) -> None:
+        tried = []
+        for code, extension in CODECS_BY_EXTENSION[self.wanted_path.suffix.lower()]:
+            target = self.wanted_path.with_suffix(extension) if extension != self.wanted_path.suffix.lower() \
+                else self.wanted_path
+            if target != self.wanted_path and target.exists() and not self.overwrite:
+                tried.append(f"{code}{extension} ({target.name} exists)")
+                continue
+            temp = temporary_path(target)
+            writer = cv2.VideoWriter(str(temp), _fourcc_text(code), self.fps, (width, height), True)
+            if writer.isOpened():
+                self._writer, self._temp, self.path, self.fourcc = writer, temp, target, code
+                self.size = (width, height)
+                return
+            writer.release()
+            temp.unlink(missing_ok=True)
+            tried.append(f"{code}{extension}")
+        raise OutputError(f"cannot write video '{self.wanted_path}': no codec could be opened "
+                          f"(tried {', '.join(tried)})")
+
+    def write(self, frame: np.ndarray) -> None:
+        """Append one BGR uint8 frame; the first frame fixes the video's size."""
+        if self._closed:
+            raise RuntimeError("VideoWriter is closed")
+        if frame.ndim == 2:
+            frame = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+        height, width = frame.shape[:2]
+        if self._writer is None:
+            self._open(width, height)
+        elif (width, height) != self.size:
+            raise OutputError(f"cannot write video '{self.path}': frame {self.frames_written} is "
+                              f"{width}x{height}, the video is {self.size[0]}x{self.size[1]}")
+        self._writer.write(np.ascontiguousarray(frame, dtype=np.uint8))
+        self.frames_written += 1
+
+    def close(self) -> Path | None:
+        """Finish the video and move it to :attr:`path`; returns that path (None if no frame was written).
+
+        Raises
+        ------
+        OutputError
+            If the finished file cannot be moved into place (the temporary file is then deleted).
+        """
+        if self._closed:
+            return self.path if self.frames_written else None
+        self._closed = True
+        if self._writer is None:
+            return None
+        self._writer.release()
+        try:
+            if not self._temp.exists() or self._temp.stat().st_size == 0:
+                raise OutputError(f"cannot write video '{self.path}': the {self.fourcc} encoder produced "
+                                  f"no data")
+            os.replace(self._temp, self.path)
+        except OSError as exc:
+            self._temp.unlink(missing_ok=True)
+            raise OutputError(f"cannot write video '{self.path}': {exc.strerror or exc}") from None
+        except OutputError:
+            self._temp.unlink(missing_ok=True)
+            raise
+        return self.path
+
+    def abort(self) -> None:
+        """Stop writing and delete the temporary file; nothing is left behind. Safe to call more than once."""
+        self._closed = True
+        if self._writer is not None:
+            self._writer.release()
+            self._writer = None
+        if self._temp is not None:
+            self._temp.unlink(missing_ok=True)

@@ -1,0 +1,303 @@
+"""``lptrack run`` end to end on tiny generated videos: outputs, stdout cleanliness, and every kind of bad input.
+
+In-process with click's CliRunner (click >= 8.2 keeps stderr apart: ``result.stdout`` / ``result.stderr``),
+plus one real subprocess of the installed ``lptrack`` console script.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from conftest import count_frames
+from logpolar_track import pipeline
+from logpolar_track.cli import main
+from logpolar_track.errors import RoiError
+from logpolar_track.geometry import Ellipse
+from logpolar_track.pipeline import read_roi_sidecar, run_video, track_video
+from logpolar_track.results import COLUMNS
+from logpolar_track.trackers import tracker_names
+
+HEADER = "frame,time_s,cx,cy,a,b,angle_deg,scale,rotation_deg,score,status"
+
+
+@pytest.fixture
+def workdir(tmp_path, monkeypatch) -> Path:
+    """An empty current folder, apart from the input video's folder, so default outputs can be listed."""
+    folder = tmp_path / "work"
+    folder.mkdir()
+    monkeypatch.chdir(folder)
+    return folder
+
+
+def invoke(*args: str):
+    return CliRunner().invoke(main, ["run", *map(str, args)], catch_exceptions=False)
+
+
+def listing(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir())
+
+
+def read_rows(text: str) -> list[dict]:
+    return list(csv.DictReader(io.StringIO(text)))
+
+
+def centre_errors(rows, poses) -> np.ndarray:
+    return np.array([np.hypot(float(r["cx"]) - p.cx, float(r["cy"]) - p.cy) for r, p in zip(rows, poses)])
+
+
+# -- what a user gets ----------------------------------------------------------------------------------------
+
+def test_run_writes_csv_and_annotated_video(tiny_video, workdir):
+    result = invoke(tiny_video.path, "--roi", "80,60,20")
+    assert result.exit_code == 0, result.stderr
+    assert result.stdout == ""  # data only on stdout when asked for
+    assert listing(workdir) == ["tiny.lptrack.csv", "tiny.lptrack.mp4"]
+    text = (workdir / "tiny.lptrack.csv").read_text()
+    assert text.splitlines()[0] == HEADER
+    rows = read_rows(text)
+    assert [int(r["frame"]) for r in rows] == list(range(tiny_video.n_frames))
+    assert [r["status"] for r in rows][0] == "init" and {r["status"] for r in rows[1:]} <= {"tracked", "lost"}
+    assert float(rows[-1]["time_s"]) == pytest.approx(19 / 30.0, abs=1e-6)
+    assert float(rows[0]["scale"]) == 1.0 and float(rows[0]["rotation_deg"]) == 0.0
+    # The pipeline is wired right: the CSV follows the moving disc (tracker accuracy is tested elsewhere).
+    assert np.median(centre_errors(rows, tiny_video.poses)) < 1.5
+    n, size, fps = count_frames(workdir / "tiny.lptrack.mp4")
+    assert (n, size) == (tiny_video.n_frames, tiny_video.size)
+    assert fps == pytest.approx(30.0, abs=0.01)
+    summary = result.stderr.strip().splitlines()[-1]
+    assert "20 frames" in summary and "mp4v" in summary and "tiny.lptrack.csv" in summary
+
+
+def test_roi_from_sidecar_and_explicit_outputs(tiny_video, workdir):
+    result = invoke(tiny_video.path, "--out", "annotated.avi", "--csv", "track.csv", "-q")
+    assert result.exit_code == 0, result.stderr
+    assert result.stderr == "" and result.stdout == ""  # --quiet
+    assert listing(workdir) == ["annotated.avi", "track.csv"]
+    rows = read_rows((workdir / "track.csv").read_text())
+    assert (float(rows[0]["cx"]), float(rows[0]["cy"]), float(rows[0]["a"])) == (80.0, 60.0, 20.0)
+    assert count_frames(workdir / "annotated.avi")[:2] == (tiny_video.n_frames, tiny_video.size)
+
+
+def test_csv_dash_gives_clean_csv_on_stdout_and_no_video(tiny_video, workdir):
+    result = invoke(tiny_video.path, "--roi", "80,60,20", "--csv", "-", "--no-video")
+    assert result.exit_code == 0, result.stderr
+    assert result.stdout.splitlines()[0] == HEADER
+    rows = list(csv.reader(io.StringIO(result.stdout)))
+    assert len(rows) == 1 + tiny_video.n_frames and all(len(r) == len(COLUMNS) for r in rows)
+    assert "frames" in result.stderr  # the summary went to stderr
+    assert listing(workdir) == []  # --no-video: no video; CSV on stdout: no file
+
+
+def test_no_video_writes_only_the_csv(tiny_video, workdir):
+    result = invoke(tiny_video.path, "--no-video", "-q")
+    assert result.exit_code == 0, result.stderr
+    assert listing(workdir) == ["tiny.lptrack.csv"]
+
+
+def test_ellipse_roi_and_start_frame(tiny_video, workdir):
+    result = invoke(tiny_video.path, "--roi", "80,60,24,16,30", "--start-frame", "5", "--csv", "-", "--no-video")
+    assert result.exit_code == 0, result.stderr
+    rows = read_rows(result.stdout)
+    assert [int(r["frame"]) for r in rows] == list(range(5, tiny_video.n_frames))
+    assert float(rows[0]["time_s"]) == pytest.approx(5 / 30.0, abs=1e-6)
+    assert rows[0]["status"] == "init" and float(rows[0]["angle_deg"]) == 30.0
+    assert all(float(r["a"]) / float(r["b"]) == pytest.approx(1.5, rel=1e-3) for r in rows)
+
+
+def test_existing_output_is_not_overwritten_without_flag(tiny_video, workdir):
+    (workdir / "tiny.lptrack.csv").write_text("precious\n")
+    result = invoke(tiny_video.path)
+    assert result.exit_code == 1
+    assert result.stderr.count("\n") == 1 and "tiny.lptrack.csv" in result.stderr
+    assert "--overwrite" in result.stderr
+    assert listing(workdir) == ["tiny.lptrack.csv"]
+    assert (workdir / "tiny.lptrack.csv").read_text() == "precious\n"
+    assert invoke(tiny_video.path, "--overwrite", "-q").exit_code == 0
+    assert (workdir / "tiny.lptrack.csv").read_text().startswith(HEADER)
+
+
+def test_roi_partly_over_the_border_still_tracks(make_video, tmp_path, workdir):
+    clip = make_video(tmp_path, "edge.mp4", start=(10.0, 60.0), path_radius=3.0, scale_range=(0.95, 1.05))
+    assert 0.5 < clip.roi.fraction_inside(*clip.size) < 0.95
+    result = invoke(clip.path, "--csv", "-", "--no-video")
+    assert result.exit_code == 0, result.stderr
+    rows = read_rows(result.stdout)
+    assert len(rows) == clip.n_frames and all(r["status"] != "lost" for r in rows)
+    assert np.median(centre_errors(rows, clip.poses)) < 1.5
+
+
+def test_interrupt_exits_130_and_leaves_nothing(tiny_video, workdir, monkeypatch):
+    real_draw = pipeline.draw_state
+
+    def draw_then_interrupt(frame, state, *, frame_index, status):
+        if frame_index == 5:
+            raise KeyboardInterrupt
+        return real_draw(frame, state, frame_index=frame_index, status=status)
+
+    monkeypatch.setattr(pipeline, "draw_state", draw_then_interrupt)
+    result = invoke(tiny_video.path)
+    assert result.exit_code == 130
+    assert listing(workdir) == []  # no finished-looking file, no temporary file
+
+
+def test_help_explains_roi_and_lists_every_tracker():
+    result = CliRunner().invoke(main, ["run", "--help"])
+    assert result.exit_code == 0
+    assert "cx,cy,a,b,angle" in result.stdout and "counter-clockwise" in result.stdout
+    assert HEADER in result.stdout
+    for name in tracker_names():
+        assert name in result.stdout
+
+
+# -- bad input: one line on stderr, the right exit code, no traceback, nothing left behind --------------------
+
+def _not_a_video(folder: Path) -> Path:
+    path = folder / "notes.mp4"
+    path.write_text("not a video\n" * 100)
+    return path
+
+
+def _zero_bytes(folder: Path) -> Path:
+    path = folder / "empty.mp4"
+    path.touch()
+    return path
+
+
+def _no_frames(folder: Path) -> Path:
+    import cv2
+
+    path = folder / "noframes.avi"
+    cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (64, 48)).release()
+    return path
+
+
+BAD = {
+    # id: (video maker or None for the tiny video, extra args, exit code, fragments of the message)
+    "missing-file": (lambda d: d / "nope.mp4", ["--roi", "1,2,3"], 1, ["nope.mp4", "not found"]),
+    "not-a-video": (_not_a_video, ["--roi", "1,2,3"], 1, ["notes.mp4", "cannot read"]),
+    "zero-byte-video": (_zero_bytes, ["--roi", "1,2,3"], 1, ["no frames"]),
+    "video-without-frames": (_no_frames, ["--roi", "1,2,3"], 1, ["noframes.avi"]),
+    "roi-two-numbers": (None, ["--roi", "1,2"], 2, ["cx,cy,r", "cx,cy,a,b,angle"]),
+    "roi-not-numbers": (None, ["--roi", "a,b,c"], 2, ["not a list of numbers", "cx,cy,r"]),
+    "roi-negative-radius": (None, ["--roi", "80,60,-5"], 2, ["> 0", "cx,cy,r"]),
+    "roi-zero-radius": (None, ["--roi", "80,60,0"], 2, ["> 0", "cx,cy,r"]),
+    "roi-mostly-outside": (None, ["--roi", "159,119,30"], 2, ["mostly outside", "160x120", "tiny.mp4"]),
+    "roi-centre-outside": (None, ["--roi", "200,60,10"], 2, ["outside", "0 <= cx < 160"]),
+    "unknown-tracker": (None, ["--tracker", "nosuch"], 2, ["nosuch", tracker_names()[0]]),
+    "start-frame-past-end": (None, ["--start-frame", "99"], 1, ["past the end", "20 frames"]),
+    "missing-output-folder": (None, ["--out", "missing/out.mp4"], 1, ["missing", "does not exist"]),
+    "missing-csv-folder": (None, ["--csv", "missing/out.csv"], 1, ["missing", "does not exist"]),
+    "output-folder-is-a-file": (None, ["--csv", "{video}/out.csv"], 1, ["not a folder"]),
+    "unsupported-video-extension": (None, ["--out", "out.txt"], 2, ["unsupported extension", ".mp4"]),
+    "out-and-no-video": (None, ["--out", "a.mp4", "--no-video"], 2, ["--no-video"]),
+}
+
+
+@pytest.mark.parametrize("make, args, code, fragments", BAD.values(), ids=BAD.keys())
+def test_bad_input(tiny_video, workdir, make, args, code, fragments):
+    video = make(tiny_video.path.parent) if make else tiny_video.path
+    inputs_before = listing(tiny_video.path.parent)
+    args = [a.replace("{video}", str(video)) for a in args]
+    result = invoke(video, *args)
+    assert result.exit_code == code, result.stderr
+    assert "Traceback" not in result.output
+    assert result.stdout == ""
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("lptrack: error: "), result.stderr
+    for fragment in fragments:
+        assert fragment in lines[0]
+    assert listing(workdir) == []
+    assert listing(tiny_video.path.parent) == inputs_before
+
+
+def test_no_roi_and_no_sidecar(tiny_video, workdir):
+    tiny_video.path.with_suffix(".roi").unlink()
+    result = invoke(tiny_video.path)
+    assert result.exit_code == 2
+    assert "no ROI" in result.stderr and "--roi" in result.stderr and "tiny.roi" in result.stderr
+    assert listing(workdir) == []
+
+
+@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="root can write to read-only folders")
+def test_unwritable_output_folder(tiny_video, workdir):
+    locked = workdir / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        result = invoke(tiny_video.path, "--csv", "locked/out.csv", "--no-video")
+    finally:
+        locked.chmod(0o700)
+    assert result.exit_code == 1 and "not writable" in result.stderr and "Traceback" not in result.output
+    assert listing(locked) == []
+
+
+# -- the library underneath ----------------------------------------------------------------------------------
+
+def test_track_video_yields_init_then_one_result_per_frame(tiny_video):
+    results = list(track_video(tiny_video.path, "80,60,20"))
+    assert len(results) == tiny_video.n_frames
+    assert results[0].status == "init" and results[0].state.scale == 1.0
+    assert [r.frame for r in results] == list(range(tiny_video.n_frames))
+
+
+def test_track_video_accepts_a_tracker_instance(tiny_video):
+    from logpolar_track.trackers import Tracker, TrackState
+
+    class Still(Tracker):
+        name = "still-test"
+
+        def init(self, frame, roi):
+            self.state = TrackState(roi, 1.0, None, 1.0)
+            return self.state
+
+        def update(self, frame):
+            return frame.mean() > 1e9, self.state  # never "found": every later frame is lost
+
+    results = list(track_video(tiny_video.path, Ellipse.circle(80, 60, 20), Still()))
+    assert [r.status for r in results] == ["init"] + ["lost"] * (tiny_video.n_frames - 1)
+
+
+def test_run_video_summary(tiny_video, tmp_path):
+    summary = run_video(tiny_video.path, None, csv_out=tmp_path / "t.csv", video_out=tmp_path / "t.mp4")
+    assert summary.frames == tiny_video.n_frames and summary.video_out == tmp_path / "t.mp4"
+    assert summary.fourcc == "mp4v" and summary.csv_out == str(tmp_path / "t.csv")
+    assert summary.video_fps == pytest.approx(30.0) and (summary.width, summary.height) == (160, 120)
+
+
+@pytest.mark.parametrize("name", ["clip.roi", "clip.mp4.roi"])
+def test_read_roi_sidecar_names(tmp_path, name):
+    (tmp_path / name).write_text("# initial ROI\n10,20,30,15,45\n")
+    assert read_roi_sidecar(tmp_path / "clip.mp4") == Ellipse(10, 20, 30, 15, 45)
+    assert read_roi_sidecar(tmp_path / "other.mp4") is None
+
+
+def test_bad_roi_sidecar_names_the_file(tmp_path):
+    (tmp_path / "clip.roi").write_text("1,2\n")
+    with pytest.raises(RoiError, match="clip.roi"):
+        read_roi_sidecar(tmp_path / "clip.mp4")
+
+
+# -- the real console script ----------------------------------------------------------------------------------
+
+def test_console_script_csv_dash_is_clean(tiny_video, workdir):
+    script = shutil.which("lptrack", path=str(Path(sys.executable).parent)) or shutil.which("lptrack")
+    if script is None:
+        pytest.skip("the lptrack console script is not installed (pip install -e .)")
+    proc = subprocess.run([script, "run", str(tiny_video.path), "--csv", "-", "--no-video"],
+                          capture_output=True, text=True, timeout=120, cwd=workdir)
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert lines[0] == HEADER and len(lines) == 1 + tiny_video.n_frames
+    assert all(len(row) == len(COLUMNS) for row in csv.reader(lines))
+    assert "frames" in proc.stderr and "Traceback" not in proc.stderr
+    assert listing(workdir) == []

@@ -1,0 +1,207 @@
+"""VideoReader and VideoWriter: what they deliver, how they fail, and that nothing half-written is left."""
+
+from __future__ import annotations
+
+import threading
+
+import cv2
+import numpy as np
+import pytest
+
+from conftest import count_frames, write_video
+from logpolar_track import video as video_module
+from logpolar_track.errors import OutputError, VideoError
+from logpolar_track.video import FALLBACK_FPS, VideoReader, VideoWriter, temporary_path
+
+
+def _decode_all(path):
+    cap = cv2.VideoCapture(str(path))
+    frames = []
+    while True:
+        ok, frame = cap.read()
+        if not ok:
+            break
+        frames.append(frame)
+    cap.release()
+    return frames
+
+
+@pytest.mark.parametrize("name", ["clip.mp4", "clip.avi"])
+def test_reader_yields_every_frame_with_index_and_time(make_video, tmp_path, name):
+    clip = make_video(tmp_path, name, fps=29.97)
+    expected = _decode_all(clip.path)
+    with VideoReader(clip.path) as reader:
+        assert (reader.width, reader.height) == clip.size
+        assert reader.fps == pytest.approx(29.97, abs=0.01)  # a float, not truncated to 29
+        assert not reader.fps_guessed
+        items = list(reader)
+    assert [i for i, _, _ in items] == list(range(clip.n_frames))
+    assert len(expected) == clip.n_frames
+    for (i, t, frame), ref in zip(items, expected):
+        assert t == pytest.approx(i / reader.fps)
+        assert np.array_equal(frame, ref)
+
+
+def test_start_frame_skips_exactly(tiny_video):
+    expected = _decode_all(tiny_video.path)
+    with VideoReader(tiny_video.path, start_frame=7) as reader:
+        items = list(reader)
+    assert [i for i, _, _ in items] == list(range(7, tiny_video.n_frames))
+    assert items[0][1] == pytest.approx(7 / tiny_video.fps)
+    assert all(np.array_equal(f, expected[i]) for i, _, f in items)
+
+
+def test_start_frame_past_end_says_how_many_frames(tiny_video):
+    with pytest.raises(VideoError, match=r"past the end .* has 20 frames"):
+        VideoReader(tiny_video.path, start_frame=20)
+
+
+def test_close_early_stops_the_decoding_thread(tiny_video):
+    reader = VideoReader(tiny_video.path, read_ahead=2)
+    frames = iter(reader)
+    next(frames), next(frames)
+    assert reader._thread is not None  # decoding ahead has started
+    reader.close()
+    assert not reader._thread.is_alive()
+    assert not any(t.name.startswith("lptrack-read") and t.is_alive() for t in threading.enumerate())
+
+
+def test_reader_iterates_once(tiny_video):
+    with VideoReader(tiny_video.path) as reader:
+        list(reader)
+        with pytest.raises(RuntimeError, match="once"):
+            iter(reader)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(VideoError, match="not found"):
+        VideoReader(tmp_path / "nope.mp4")
+
+
+def test_folder_is_not_a_video(tmp_path):
+    with pytest.raises(VideoError, match="folder"):
+        VideoReader(tmp_path)
+
+
+def test_text_file_is_not_a_video(tmp_path):
+    fake = tmp_path / "fake.mp4"
+    fake.write_text("this is not a video\n" * 50)
+    with pytest.raises(VideoError, match="cannot read .* as a video"):
+        VideoReader(fake)
+
+
+def test_zero_byte_file(tmp_path):
+    empty = tmp_path / "empty.mp4"
+    empty.touch()
+    with pytest.raises(VideoError, match="no frames"):
+        VideoReader(empty)
+
+
+def test_video_closed_without_frames(tmp_path):
+    path = tmp_path / "noframes.avi"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (64, 48))
+    writer.release()
+    with pytest.raises(VideoError, match="no frames|cannot read"):
+        VideoReader(path)
+
+
+def test_fps_fallback_when_container_reports_none(tiny_video, monkeypatch):
+    class NoFps:
+        """A capture whose container reports NaN fps (composition: subclassing cv2 classes is unsafe)."""
+
+        def __init__(self, path):
+            self._cap = cv2.VideoCapture(str(path))
+
+        def get(self, prop):
+            return float("nan") if prop == cv2.CAP_PROP_FPS else self._cap.get(prop)
+
+        def __getattr__(self, name):
+            return getattr(self._cap, name)
+
+    monkeypatch.setattr(video_module, "_open_capture", NoFps)
+    with VideoReader(tiny_video.path) as reader:
+        assert reader.fps == FALLBACK_FPS and reader.fps_guessed
+        items = list(reader)
+    assert items[-1][1] == pytest.approx(19 / FALLBACK_FPS)
+
+
+# -- writer --------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name, fourcc", [("out.mp4", "mp4v"), ("out.avi", "MJPG")])
+def test_writer_round_trip_keeps_count_size_and_fps(tiny_video, tmp_path, name, fourcc):
+    target = tmp_path / "w" / name
+    target.parent.mkdir()
+    with VideoWriter(target, 29.97) as writer:
+        for frame in tiny_video.frames:
+            writer.write(frame)
+            # Until closed, only the hidden temporary file exists.
+            assert not target.exists()
+            assert temporary_path(target).exists()
+    assert writer.fourcc == fourcc and writer.path == target
+    assert sorted(p.name for p in target.parent.iterdir()) == [name]
+    n, size, fps = count_frames(target)
+    assert (n, size) == (tiny_video.n_frames, tiny_video.size)
+    assert fps == pytest.approx(29.97, abs=0.01)
+
+
+def test_writer_abort_on_exception_leaves_nothing(tiny_video, tmp_path):
+    with pytest.raises(KeyboardInterrupt):
+        with VideoWriter(tmp_path / "out.mp4", 30.0) as writer:
+            writer.write(tiny_video.frames[0])
+            raise KeyboardInterrupt
+    assert list(tmp_path.glob("out*")) == [] and list(tmp_path.glob(".out*")) == []
+
+
+def test_writer_falls_back_to_next_codec_and_says_so(tiny_video, tmp_path, monkeypatch):
+    monkeypatch.setitem(video_module.CODECS_BY_EXTENSION, ".mp4", (("ZZZZ", ".mp4"), ("MJPG", ".avi")))
+    with VideoWriter(tmp_path / "out.mp4", 30.0) as writer:
+        for frame in tiny_video.frames[:3]:
+            writer.write(frame)
+    assert writer.fourcc == "MJPG" and writer.path == tmp_path / "out.avi"
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(("out", ".out"))] == ["out.avi"]
+    assert count_frames(writer.path)[0] == 3
+
+
+def test_writer_no_codec_at_all(tiny_video, tmp_path, monkeypatch):
+    monkeypatch.setitem(video_module.CODECS_BY_EXTENSION, ".mp4", (("ZZZZ", ".mp4"),))
+    writer = VideoWriter(tmp_path / "out.mp4", 30.0)
+    with pytest.raises(OutputError, match="no codec"):
+        writer.write(tiny_video.frames[0])
+    writer.abort()
+    assert [p for p in tmp_path.iterdir() if "out" in p.name] == []
+
+
+def test_writer_refuses_existing_unless_overwrite(tiny_video, tmp_path):
+    target = tmp_path / "out.mp4"
+    target.write_bytes(b"precious")
+    with pytest.raises(OutputError, match=r"already exists.*--overwrite"):
+        VideoWriter(target, 30.0)
+    assert target.read_bytes() == b"precious"
+    with VideoWriter(target, 30.0, overwrite=True) as writer:
+        writer.write(tiny_video.frames[0])
+    assert count_frames(target)[0] == 1
+
+
+@pytest.mark.parametrize("where, fragment", [("missing/out.mp4", "does not exist"),
+                                             ("afile.txt/out.mp4", "not a folder")])
+def test_writer_bad_folder(tmp_path, where, fragment):
+    (tmp_path / "afile.txt").write_text("x")
+    with pytest.raises(OutputError, match=fragment):
+        VideoWriter(tmp_path / where, 30.0)
+
+
+def test_writer_rejects_unknown_extension_and_size_change(tiny_video, tmp_path):
+    with pytest.raises(OutputError, match="unsupported extension"):
+        VideoWriter(tmp_path / "out.txt", 30.0)
+    writer = VideoWriter(tmp_path / "out.avi", 30.0)
+    writer.write(tiny_video.frames[0])
+    with pytest.raises(OutputError, match="160x120"):
+        writer.write(np.zeros((10, 10, 3), np.uint8))
+    writer.abort()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["tiny.mp4", "tiny.roi"]
+
+
+def test_write_video_helper_writes_readable_clip(tmp_path):
+    frames = [np.full((48, 64, 3), i * 10, np.uint8) for i in range(5)]
+    path = write_video(tmp_path / "grey.avi", frames, 10.0)
+    assert count_frames(path)[:2] == (5, (64, 48))

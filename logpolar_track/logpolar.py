@@ -111,6 +111,22 @@ class LogPolarGrid:
         return out.reshape(len(centres), self.n_rho, self.n_theta)
 
 
+def rfft2_float32(images: np.ndarray) -> np.ndarray:
+    """``numpy.fft.rfft2`` of float32 ``(..., n, m)`` images over the last two axes, as complex64.
+
+    Computed through the inverse transforms, which NumPy 2.4's pocketfft runs 3-5 times faster than the
+    forward ones in single precision (measured: 121 x 64 x 128, 14.5 ms forward vs 3.1 ms this way). For real
+    ``x``, ``rfft(x) = n conj(ihfft(x))`` and ``fft(z) = n conj(ifft(conj(z)))``, which combine to
+    ``rfft2(x) = n m conj(ifft(ihfft(x), axis=-2))``. Equal to ``rfft2`` up to float32 rounding.
+    """
+    n, m = images.shape[-2:]
+    half = np.fft.ihfft(images, axis=-1)
+    out = np.fft.ifft(half, axis=-2)
+    np.conjugate(out, out=out)
+    out *= np.float32(n * m)
+    return out
+
+
 def to_gray(frame: np.ndarray) -> np.ndarray:
     """A BGR or grey uint8 frame as a float32 grey image (0 to 255); the input is not modified."""
     if frame.ndim == 3:
@@ -149,8 +165,13 @@ class PhaseCorrelator:
         multiplicity[0] = 1.0
         if n_theta % 2 == 0:
             multiplicity[-1] = 1.0
+        # Images are made zero-mean before the FFT, so the DC term of the cross-power spectrum is 0/0: its
+        # phase would be rounding noise and shift the whole surface by +-1/peak_norm at random. Drop it.
+        weight[0, 0] = 0.0
         self.weight = weight.astype(np.float32)
         self.peak_norm = float((weight * multiplicity[None, :]).sum())
+        # The weight with the surface's normalisation folded in, so correlate() needs one product.
+        self._scaled_weight = (weight * (n_rho * n_theta / self.peak_norm)).astype(np.float32)
 
     def spectrum(self, images: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
         """Windowed, normalised real FFT of ``(..., n_rho, n_theta)`` images (complex64).
@@ -158,11 +179,13 @@ class PhaseCorrelator:
         ``mask`` (broadcastable, values 0 to 1) down-weights samples, e.g. rings or sectors that are occluded.
         """
         images = np.asarray(images, dtype=np.float32)
-        w = self.window if mask is None else self.window * mask.astype(np.float32)
+        w = self.window if mask is None else self.window * np.asarray(mask, dtype=np.float32)
         mean = (images * w).sum(axis=(-2, -1), keepdims=True) / w.sum()
-        centred = (images - mean) * w
-        std = np.sqrt((centred ** 2).sum(axis=(-2, -1), keepdims=True)) + 1e-6
-        return np.fft.rfft2(centred / std).astype(np.complex64)
+        centred = images - mean
+        centred *= w
+        norm = np.sqrt(np.einsum("...ij,...ij->...", centred, centred))[..., None, None] + np.float32(1e-6)
+        centred /= norm
+        return rfft2_float32(centred)
 
     def correlate(self, ref_spec: np.ndarray, img_spec: np.ndarray) -> np.ndarray:
         """Correlation surfaces ``(..., n_rho, n_theta)`` of ``img`` against ``ref`` (broadcast over batch).
@@ -171,10 +194,9 @@ class PhaseCorrelator:
         its height is 1 for identical images and near 0 for unrelated ones.
         """
         cross = img_spec * np.conj(ref_spec)
-        cross /= np.abs(cross) + 1e-12
-        cross *= self.weight
-        return np.fft.irfft2(cross, s=self.shape).astype(np.float32) * (cross.shape[-2] * self.shape[1]
-                                                                          / self.peak_norm)
+        # Normalise and weight with one real factor per bin (cheaper than dividing complex numbers).
+        cross *= self._scaled_weight / (np.abs(cross) + np.float32(1e-12))
+        return np.fft.irfft2(cross, s=self.shape).astype(np.float32, copy=False)
 
 
 @dataclass(frozen=True)

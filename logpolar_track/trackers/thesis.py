@@ -7,6 +7,13 @@ its height the match score. They differ in how they find the centre and which te
 Centres are searched on an integer grid of ``window`` x ``window`` pixels around the last position; the best
 cell is refined to sub-pixel precision with a parabola through its neighbours' scores, and the object is
 re-sampled there once more to refine scale and rotation to sub-bin precision.
+
+Speed (``coarse=True``, the default): the window is first scored with a log-polar grid of half the size in
+each direction (a quarter of the samples and FFT work), then the full-size heights are computed only around
+the coarse winner, climbing to the best neighbour until the cell beats all eight of its neighbours. That is
+the exhaustive full-size search's answer whenever its maximum is reachable uphill from the coarse maximum (a
+single peak over the window, the normal case); ``coarse=False`` runs the exhaustive search, kept as the
+reference the tests compare against.
 """
 
 from __future__ import annotations
@@ -66,16 +73,89 @@ def rotate_screen(vectors: np.ndarray, angle_deg: float) -> np.ndarray:
     return np.stack([x * c + y * s, -x * s + y * c], axis=1)
 
 
-class _WindowSearch(SimilarityTracker):
-    """Shared machinery: exhaustive centre search in a window, then one re-sampling to refine."""
+class _CellSpectra:
+    """Full-size spectra of a window's cells, computed on demand in batches and remembered for this frame."""
 
-    def __init__(self, *, window: int = 11, n_rho: int = 64, n_theta: int = 128, lost_threshold: float = 0.2):
+    def __init__(self, matcher: LogPolarMatcher, gray, centres, scale, angle_deg):
+        self.matcher, self.gray, self.centres = matcher, gray, centres
+        self.scale, self.angle = scale, angle_deg
+        self.cache: dict[int, np.ndarray] = {}
+
+    def get(self, indices: np.ndarray) -> np.ndarray:
+        missing = [int(i) for i in indices if int(i) not in self.cache]
+        if missing:
+            spectra = self.matcher.spectra(self.gray, self.centres[missing], self.scale, self.angle)
+            self.cache.update(zip(missing, spectra))
+        return np.stack([self.cache[int(i)] for i in indices])
+
+
+def take(peak: Peak, index: int) -> Peak:
+    """The single peak ``index`` of a batch, as a batch of one."""
+    return Peak(peak.d_rho[index:index + 1], peak.d_theta[index:index + 1], peak.height[index:index + 1])
+
+
+class _WindowSearch(SimilarityTracker):
+    """Shared machinery: centre search in a window (coarse-to-fine or exhaustive), then one re-sampling.
+
+    Parameters
+    ----------
+    window : int
+        Side in pixels of the square of candidate centres around the last position (odd, >= 3).
+    n_rho, n_theta : int
+        Log-polar image size (rings x directions) of the full-size templates.
+    lost_threshold : float
+        Frames whose match height (0 to 1) is below this are reported lost.
+    coarse : bool
+        Score the window on a half-size grid first and compute full-size heights only while climbing from the
+        coarse winner (fast); False runs the exhaustive full-size search (the reference).
+    """
+
+    def __init__(self, *, window: int = 11, n_rho: int = 64, n_theta: int = 128, lost_threshold: float = 0.2,
+                 coarse: bool = True):
         super().__init__(lost_threshold=lost_threshold)
         if window < 3 or window % 2 == 0:
             raise ValueError(f"window must be an odd number >= 3 pixels, got {window}")
         self.window = int(window)
         self.n_rho, self.n_theta = int(n_rho), int(n_theta)
         self.offsets = window_offsets(self.window)
+        self.coarse = bool(coarse)
+
+    def _matchers(self, a: float, b: float) -> tuple[LogPolarMatcher, LogPolarMatcher | None]:
+        """Full-size matcher, and the half-size one used to score the window when ``coarse`` is on."""
+        full = LogPolarMatcher(a, b, n_rho=self.n_rho, n_theta=self.n_theta)
+        if not self.coarse:
+            return full, None
+        return full, LogPolarMatcher(a, b, n_rho=max(8, self.n_rho // 2), n_theta=max(16, self.n_theta // 2))
+
+    def _climb(self, start: int, evaluate) -> tuple[int, np.ndarray]:
+        """Hill-climb full-size heights from cell ``start``; returns the best cell and its sub-pixel offset.
+
+        ``evaluate(indices)`` returns the heights of those cells. The climb moves to the best of the current
+        cell's (up to) eight neighbours until none is higher, so the cell it stops on is the highest of all
+        cells evaluated, and its four neighbours are known for the parabola fit.
+        """
+        n = self.window
+        grid = np.full((n, n), -np.inf)
+        current = int(start)
+        while True:
+            r, c = divmod(current, n)
+            rows = np.arange(max(r - 1, 0), min(r + 2, n))
+            cols = np.arange(max(c - 1, 0), min(c + 2, n))
+            cells = (rows[:, None] * n + cols[None, :]).ravel()
+            todo = cells[np.isneginf(grid.ravel()[cells])]
+            if len(todo):
+                grid.ravel()[todo] = evaluate(todo)
+            best = int(cells[np.argmax(grid.ravel()[cells])])
+            if best == current or grid.ravel()[best] <= grid.ravel()[current]:
+                break
+            current = best
+        return current, self._offset(grid, current)
+
+    def _offset(self, grid: np.ndarray, best: int) -> np.ndarray:
+        """Sub-pixel offset ``(dx, dy)`` of cell ``best`` from the window's centre (parabola through neighbours)."""
+        row, col, _ = parabola_peak_2d(grid)
+        half = self.window // 2
+        return np.array([col - half, row - half], dtype=np.float64)
 
     def _angle(self, sim: Similarity) -> float:
         return self.roi.angle_deg + sim.rotation_deg
@@ -104,19 +184,49 @@ class FixedTemplateTracker(_WindowSearch):
     summary = "fixed first-frame template; log-polar phase correlation at every centre of a window"
 
     def _start(self, gray: np.ndarray, roi: Ellipse) -> None:
-        self.matcher = LogPolarMatcher(roi.a, roi.b, n_rho=self.n_rho, n_theta=self.n_theta)
-        self.matcher.template = self.matcher.spectra(gray, np.array([[roi.cx, roi.cy]]), 1.0, roi.angle_deg)
+        self.matcher, self.coarse_matcher = self._matchers(roi.a, roi.b)
+        centre = np.array([[roi.cx, roi.cy]])
+        for m in (self.matcher, self.coarse_matcher):
+            if m is not None:
+                m.template = m.spectra(gray, centre, 1.0, roi.angle_deg)
 
     def _search(self, gray, last: Similarity, template=None) -> Similarity:
+        """Exhaustive full-size search of the window against ``template`` (default: the first frame's)."""
         centres = np.array([last.cx, last.cy], np.float32) + self.offsets
         peak = self.matcher.match(self.matcher.spectra(gray, centres, last.scale, self._angle(last)), template)
         best, offset = self._best_cell(peak.height)
-        ds, dr = self.matcher.to_change(peak, best)
+        return self._finish(gray, last, take(peak, best), offset, template)
+
+    def _finish(self, gray, last: Similarity, peak: Peak, offset, template=None) -> Similarity:
+        ds, dr = self.matcher.to_change(peak, 0)
         return self._refine(self.matcher, gray, last.cx + offset[0], last.cy + offset[1],
                             last.scale * ds, last.rotation_deg + dr, template)
 
+    def _coarse_to_fine(self, gray, last: Similarity, pairs) -> list[Similarity]:
+        """Window search for each ``(full template, coarse template)`` of ``pairs``, sharing the samples."""
+        centres = np.array([last.cx, last.cy], np.float32) + self.offsets
+        scale, angle = last.scale, self._angle(last)
+        coarse_specs = self.coarse_matcher.spectra(gray, centres, scale, angle)
+        coarse_refs = np.stack([c for _, c in pairs])[:, None]
+        coarse_heights = self.coarse_matcher.match(coarse_specs[None], coarse_refs).height
+        cells = _CellSpectra(self.matcher, gray, centres, scale, angle)
+        results = []
+        for (template, _), heights in zip(pairs, coarse_heights):
+            peaks: dict[int, Peak] = {}
+
+            def evaluate(indices, template=template, peaks=peaks):
+                peak = self.matcher.match(cells.get(indices), template)
+                peaks.update((int(i), take(peak, n)) for n, i in enumerate(indices))
+                return peak.height
+
+            best, offset = self._climb(int(np.argmax(heights)), evaluate)
+            results.append(self._finish(gray, last, peaks[best], offset, template))
+        return results
+
     def _estimate(self, gray: np.ndarray, last: Similarity) -> Similarity:
-        return self._search(gray, last)
+        if not self.coarse:
+            return self._search(gray, last)
+        return self._coarse_to_fine(gray, last, [(self.matcher.template, self.coarse_matcher.template)])[0]
 
 
 @register
@@ -127,19 +237,36 @@ class DifferenceDecompositionTracker(_WindowSearch):
     summary = "difference decomposition: one log-polar sample per frame against precomputed shifted templates"
 
     def _start(self, gray: np.ndarray, roi: Ellipse) -> None:
-        self.matcher = LogPolarMatcher(roi.a, roi.b, n_rho=self.n_rho, n_theta=self.n_theta)
+        self.matcher, self.coarse_matcher = self._matchers(roi.a, roi.b)
         centres = np.array([roi.cx, roi.cy], np.float32) + self.offsets
         self.shifted_templates = self.matcher.spectra(gray, centres, 1.0, roi.angle_deg)
         self.matcher.template = self.shifted_templates[len(self.offsets) // 2]
+        if self.coarse_matcher is not None:
+            self.coarse_shifted = self.coarse_matcher.spectra(gray, centres, 1.0, roi.angle_deg)
 
     def _estimate(self, gray: np.ndarray, last: Similarity) -> Similarity:
-        current = self.matcher.spectra(gray, np.array([[last.cx, last.cy]]), last.scale, self._angle(last))
-        peak = self.matcher.match(current, self.shifted_templates)
-        best, offset = self._best_cell(peak.height)
+        centre = np.array([[last.cx, last.cy]])
+        current = self.matcher.spectra(gray, centre, last.scale, self._angle(last))
+        if self.coarse:
+            coarse = self.coarse_matcher.spectra(gray, centre, last.scale, self._angle(last))
+            heights = self.coarse_matcher.match(coarse, self.coarse_shifted).height
+            peaks: dict[int, Peak] = {}
+
+            def evaluate(indices):
+                peak = self.matcher.match(current, self.shifted_templates[indices])
+                peaks.update((int(i), take(peak, n)) for n, i in enumerate(indices))
+                return peak.height
+
+            best, offset = self._climb(int(np.argmax(heights)), evaluate)
+            peak = peaks[best]
+        else:
+            peak = self.matcher.match(current, self.shifted_templates)
+            best, offset = self._best_cell(peak.height)
+            peak = take(peak, best)
         # The current sample looks like the template sampled `offset` away from the object's centre, in the
         # object's own frame at scale 1: the object is that offset back, scaled and turned into the image.
         motion = -rotate_screen(offset[None, :], last.rotation_deg)[0] * last.scale
-        ds, dr = self.matcher.to_change(peak, best)
+        ds, dr = self.matcher.to_change(peak, 0)
         return self._refine(self.matcher, gray, last.cx + motion[0], last.cy + motion[1],
                             last.scale * ds, last.rotation_deg + dr)
 
@@ -158,20 +285,30 @@ class TemplateUpdateTracker(FixedTemplateTracker):
     def _start(self, gray: np.ndarray, roi: Ellipse) -> None:
         super()._start(gray, roi)
         self.current_template = self.matcher.template
+        self.coarse_current = None if self.coarse_matcher is None else self.coarse_matcher.template
         self._gray = gray
 
     def _estimate(self, gray: np.ndarray, last: Similarity) -> Similarity:
         self._gray = gray
-        from_initial = self._search(gray, last)
-        from_current = self._search(gray, last, self.current_template)
+        if self.coarse:
+            # Both templates are searched on the same samples: one coarse batch, shared full-size cells.
+            from_initial, from_current = self._coarse_to_fine(
+                gray, last, [(self.matcher.template, self.coarse_matcher.template),
+                             (self.current_template, self.coarse_current)])
+        else:
+            from_initial = self._search(gray, last)
+            from_current = self._search(gray, last, self.current_template)
         self._initial_score = from_initial.score
         return from_initial if from_initial.score >= from_current.score else from_current
 
     def _accept(self, estimate: Similarity) -> None:
         # Renew only when the anchor (first template) still agrees: this is what keeps it from drifting.
         if self._initial_score >= self.update_threshold:
-            self.current_template = self.matcher.spectra(
-                self._gray, np.array([[estimate.cx, estimate.cy]]), estimate.scale, self._angle(estimate))
+            centre = np.array([[estimate.cx, estimate.cy]])
+            self.current_template = self.matcher.spectra(self._gray, centre, estimate.scale, self._angle(estimate))
+            if self.coarse_matcher is not None:
+                self.coarse_current = self.coarse_matcher.spectra(self._gray, centre, estimate.scale,
+                                                                  self._angle(estimate))
 
 
 @register
@@ -189,14 +326,15 @@ class TwoTemplateTracker(_WindowSearch):
 
     def _start(self, gray: np.ndarray, roi: Ellipse) -> None:
         centre = np.array([[roi.cx, roi.cy]])
-        self.outer = LogPolarMatcher(roi.a, roi.b, n_rho=self.n_rho, n_theta=self.n_theta)
-        self.inner = LogPolarMatcher(roi.a * self.inner_ratio, roi.b * self.inner_ratio,
-                                     n_rho=self.n_rho, n_theta=self.n_theta)
-        for m in (self.outer, self.inner):
-            m.template = m.spectra(gray, centre, 1.0, roi.angle_deg)
+        self.outer, self.coarse_outer = self._matchers(roi.a, roi.b)
+        self.inner, self.coarse_inner = self._matchers(roi.a * self.inner_ratio, roi.b * self.inner_ratio)
+        for m in (self.outer, self.inner, self.coarse_outer, self.coarse_inner):
+            if m is not None:
+                m.template = m.spectra(gray, centre, 1.0, roi.angle_deg)
 
-    def _combine(self, gray, centres, scale, angle):
-        peaks = [m.match(m.spectra(gray, centres, scale, angle)) for m in (self.inner, self.outer)]
+    def _combine(self, gray, centres, scale, angle, matchers=None):
+        matchers = matchers or (self.inner, self.outer)
+        peaks = [m.match(m.spectra(gray, centres, scale, angle)) for m in matchers]
         weights = (self.inner_weight, 1.0 - self.inner_weight)
         heights = weights[0] * peaks[0].height + weights[1] * peaks[1].height
         return peaks, weights, heights
@@ -211,9 +349,22 @@ class TwoTemplateTracker(_WindowSearch):
 
     def _estimate(self, gray: np.ndarray, last: Similarity) -> Similarity:
         centres = np.array([last.cx, last.cy], np.float32) + self.offsets
-        peaks, weights, heights = self._combine(gray, centres, last.scale, self._angle(last))
-        best, offset = self._best_cell(heights)
-        ds, dr = self._change(peaks, weights, best)
+        if self.coarse:
+            _, weights, coarse_heights = self._combine(gray, centres, last.scale, self._angle(last),
+                                                       (self.coarse_inner, self.coarse_outer))
+            found: dict[int, list[Peak]] = {}
+
+            def evaluate(indices):
+                peaks, _, heights = self._combine(gray, centres[indices], last.scale, self._angle(last))
+                found.update((int(i), [take(p, n) for p in peaks]) for n, i in enumerate(indices))
+                return heights
+
+            best, offset = self._climb(int(np.argmax(coarse_heights)), evaluate)
+            ds, dr = self._change(found[best], weights, 0)
+        else:
+            peaks, weights, heights = self._combine(gray, centres, last.scale, self._angle(last))
+            best, offset = self._best_cell(heights)
+            ds, dr = self._change(peaks, weights, best)
         cx, cy = last.cx + offset[0], last.cy + offset[1]
         scale, rotation = last.scale * ds, last.rotation_deg + dr
         peaks, weights, heights = self._combine(gray, np.array([[cx, cy]]), scale, self.roi.angle_deg + rotation)

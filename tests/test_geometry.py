@@ -1,0 +1,121 @@
+"""ROI parsing and validation, ellipse geometry: hand-computed values in lptrack's conventions
+(pixels, y down, angles counter-clockwise on screen)."""
+
+import math
+
+import pytest
+
+from logpolar_track.errors import RoiError
+from logpolar_track.geometry import Ellipse, check_roi_fits, parse_roi, wrap_degrees
+
+
+@pytest.mark.parametrize("spec, expected", [
+    ("100,80,20", Ellipse(100, 80, 20, 20, 0)),
+    (" 100 , 80 , 20 ", Ellipse(100, 80, 20, 20, 0)),
+    ("10.5,20.25,30,15,-45", Ellipse(10.5, 20.25, 30, 15, -45)),
+    ("1e2,8e1,2e1", Ellipse(100, 80, 20, 20, 0)),
+], ids=["circle", "spaces", "ellipse", "exponent"])
+def test_parse_roi_accepts(spec, expected):
+    assert parse_roi(spec) == expected
+
+
+@pytest.mark.parametrize("spec, fragment", [
+    ("1,2", "has 2 number(s)"),
+    ("", "has 0 number(s)"),
+    ("1,2,3,4", "has 4 number(s)"),
+    ("a,b,c", "not a list of numbers"),
+    ("1,2,nan", "non-finite"),
+    ("1,2,inf", "non-finite"),
+    ("10,10,0", "radius must be > 0"),
+    ("10,10,-5", "radius must be > 0"),
+    ("10,10,5,0,30", "semi-axes must be > 0"),
+], ids=["two", "empty", "four", "letters", "nan", "inf", "zero-r", "negative-r", "zero-b"])
+def test_parse_roi_rejects_with_message(spec, fragment):
+    with pytest.raises(RoiError) as err:
+        parse_roi(spec)
+    message = str(err.value)
+    assert fragment in message
+    # Every rejection says what is accepted (except the radius ones, which name the bad value).
+    assert "cx,cy" in message or "got" in message
+
+
+def test_to_spec_round_trips():
+    for roi in (Ellipse.circle(12.5, 7, 3), Ellipse(1, 2, 3, 4, 33.25)):
+        assert parse_roi(roi.to_spec()) == roi
+
+
+def test_check_roi_fits_accepts_roi_partly_over_border():
+    check_roi_fits(Ellipse.circle(10, 50, 15), 100, 100)  # about 70 % inside
+
+
+@pytest.mark.parametrize("roi, fragment", [
+    (Ellipse.circle(120, 50, 10), "centre (120, 50) lies outside the 100x100 frame of a.mp4"),
+    (Ellipse.circle(50, -1, 10), "lies outside"),
+    (Ellipse.circle(1, 1, 40), "lies mostly outside"),
+    (Ellipse(50, 50, 10, 1, 0), "too small"),
+], ids=["centre-right", "centre-above", "mostly-outside", "too-thin"])
+def test_check_roi_fits_rejects(roi, fragment):
+    with pytest.raises(RoiError, match=fragment.replace("(", r"\(").replace(")", r"\)")):
+        check_roi_fits(roi, 100, 100, source="a.mp4")
+
+
+@pytest.mark.parametrize("angle, half_w, half_h", [
+    (0.0, 20.0, 10.0),
+    (90.0, 10.0, 20.0),
+    (-90.0, 10.0, 20.0),
+    (180.0, 20.0, 10.0),
+    # At 45 degrees both half extents are sqrt((a^2 + b^2) / 2).
+    (45.0, math.sqrt(250.0), math.sqrt(250.0)),
+    # At 30 degrees: sqrt(a^2 cos^2 + b^2 sin^2) and sqrt(a^2 sin^2 + b^2 cos^2).
+    (30.0, math.sqrt(400 * 0.75 + 100 * 0.25), math.sqrt(400 * 0.25 + 100 * 0.75)),
+])
+def test_bounding_box_of_rotated_ellipse(angle, half_w, half_h):
+    x, y, w, h = Ellipse(50, 40, 20, 10, angle).bounding_box()
+    assert (x, y, w, h) == pytest.approx((50 - half_w, 40 - half_h, 2 * half_w, 2 * half_h), abs=1e-9)
+
+
+def test_bounding_box_contains_all_boundary_points():
+    roi = Ellipse(0, 0, 17, 5, 23)
+    x, y, w, h = roi.bounding_box()
+    pts = roi.boundary_points(720)
+    assert pts[:, 0].min() >= x - 1e-9 and pts[:, 0].max() <= x + w + 1e-9
+    assert pts[:, 1].min() == pytest.approx(y, abs=1e-3) and pts[:, 1].max() == pytest.approx(y + h, abs=1e-3)
+
+
+@pytest.mark.parametrize("angle, end", [
+    (0.0, (110.0, 50.0)),     # right
+    (90.0, (100.0, 40.0)),    # counter-clockwise on screen: up, i.e. smaller y
+    (180.0, (90.0, 50.0)),    # left
+    (-90.0, (100.0, 60.0)),   # clockwise: down
+])
+def test_axis_end_direction(angle, end):
+    assert Ellipse(100, 50, 10, 4, angle).axis_end() == pytest.approx(end, abs=1e-9)
+
+
+def test_boundary_points_go_counter_clockwise_on_screen():
+    pts = Ellipse.circle(0, 0, 1).boundary_points(4)
+    # Starting at +x, the next point a quarter turn CCW on screen is straight up (y negative).
+    assert pts[0] == pytest.approx((1, 0), abs=1e-12)
+    assert pts[1] == pytest.approx((0, -1), abs=1e-12)
+
+
+@pytest.mark.parametrize("roi, expected, tol", [
+    (Ellipse.circle(50, 50, 10), 1.0, 0.0),
+    # The frame's edge is the outer edge of its border pixels, at -0.5 (pixel centres are integers).
+    (Ellipse.circle(-0.5, 50, 10), 0.5, 0.03),       # centre on the left edge: half inside
+    (Ellipse.circle(-0.5, -0.5, 10), 0.25, 0.03),    # on a corner: a quarter inside
+    (Ellipse(50, -0.5, 30, 5, 90), 0.5, 0.03),       # tall ellipse cut by the top edge
+    (Ellipse.circle(-100, 50, 10), 0.0, 0.0),
+])
+def test_fraction_inside(roi, expected, tol):
+    assert roi.fraction_inside(100, 100) == pytest.approx(expected, abs=tol)
+
+
+def test_contains_follows_rotation():
+    roi = Ellipse(0, 0, 10, 2, 90)  # long axis pointing up on screen
+    assert roi.contains(0, -9) and not roi.contains(9, 0)
+
+
+@pytest.mark.parametrize("angle, wrapped", [(0, 0), (180, 180), (-180, 180), (190, -170), (720, 0), (-361, -1)])
+def test_wrap_degrees(angle, wrapped):
+    assert wrap_degrees(angle) == pytest.approx(wrapped)

@@ -1,0 +1,135 @@
+"""Properties of the log-polar core: identity, antisymmetry, brightness invariance, discrimination, known shifts.
+
+Conventions checked here: ``correlate(ref, img)`` peaks at ``(d_rho, d_theta)`` with
+``img[k, j] ~ ref[k - d_rho, j - d_theta]``, so an object grown by ``s`` gives ``d_rho = ln s / log_step`` > 0
+and one turned counter-clockwise on screen by ``t`` gives ``d_theta = t / degrees_per_bin`` > 0.
+"""
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from logpolar_track.logpolar import LogPolarGrid, PhaseCorrelator, find_peaks, parabola_peak_2d, to_gray
+from logpolar_track.synthetic import random_texture
+
+CENTRE = (100.0, 100.0)
+RADIUS = 40.0
+
+
+@pytest.fixture(scope="module")
+def image():
+    return random_texture(200, 200, np.random.default_rng(3), colour=False).astype(np.float32)
+
+
+def warp(img, scale, angle_deg, centre=CENTRE):
+    """``img`` scaled by ``scale`` and turned ``angle_deg`` counter-clockwise on screen about ``centre``."""
+    m = cv2.getRotationMatrix2D(centre, angle_deg, scale)  # positive angle: CCW on screen
+    return cv2.warpAffine(img, m, img.shape[::-1], flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
+
+
+def peak(ref_img, img, grid=None, centre=CENTRE):
+    grid = grid or LogPolarGrid(RADIUS, RADIUS, n_rho=64, n_theta=128)
+    pc = PhaseCorrelator((grid.n_rho, grid.n_theta))
+    ref = pc.spectrum(grid.sample(ref_img, [centre], 1.0, 0.0))
+    cur = pc.spectrum(grid.sample(img, [centre], 1.0, 0.0))
+    p = find_peaks(pc.correlate(ref, cur))
+    return float(p.d_rho[0]), float(p.d_theta[0]), float(p.height[0]), grid
+
+
+def test_identity(image):
+    d_rho, d_theta, height, _ = peak(image, image)
+    assert abs(d_rho) < 1e-3 and abs(d_theta) < 1e-3
+    assert height == pytest.approx(1.0, abs=1e-3)
+
+
+@pytest.mark.parametrize("scale, angle", [(1.12, 17.0), (0.9, -33.0), (1.0, 100.0)])
+def test_known_change_recovered_within_sub_bin_bounds(image, scale, angle):
+    d_rho, d_theta, height, grid = peak(image, warp(image, scale, angle))
+    # 0.25 bin is about 1.5 % in scale and 0.7 degree here.
+    assert d_rho == pytest.approx(math.log(scale) / grid.log_step, abs=0.25)
+    assert d_theta == pytest.approx(angle / grid.degrees_per_bin, abs=0.25)
+    assert height > 0.5
+
+
+def test_antisymmetry(image):
+    other = warp(image, 1.1, 12.5)
+    ab = peak(image, other)
+    ba = peak(other, image)
+    # B -> A is the inverse change: 1/scale and -angle (the same shifts with opposite signs).
+    assert ba[0] == pytest.approx(-ab[0], abs=0.1)
+    assert ba[1] == pytest.approx(-ab[1], abs=0.1)
+    assert ba[2] == pytest.approx(ab[2], abs=0.05)
+
+
+@pytest.mark.parametrize("gain, offset", [(1.7, 20.0), (0.4, -5.0), (1.0, 80.0)])
+def test_invariant_to_brightness_gain_and_offset(image, gain, offset):
+    changed = warp(image, 1.05, 8.0)
+    base = peak(image, changed)
+    brighter = peak(image, changed * gain + offset)
+    assert brighter == pytest.approx(base[:3] + (brighter[3],), abs=1e-3)
+
+
+def test_unrelated_images_score_low(image):
+    other = random_texture(200, 200, np.random.default_rng(99), colour=False).astype(np.float32)
+    assert peak(image, other)[2] < 0.3
+
+
+def test_ellipse_grid_outer_ring_lies_on_the_ellipse():
+    grid = LogPolarGrid(30.0, 12.0, n_rho=16, n_theta=32)
+    dx, dy = grid.pixel_offsets(2.0, 90.0)
+    # Direction 0 of the outermost ring is the end of axis a: with the axis turned 90 degrees CCW on screen it
+    # points up (negative y), 2 * 30 pixels away; direction 90 (a quarter turn on) is b's end, to the left.
+    assert (dx[-1, 0], dy[-1, 0]) == pytest.approx((0.0, -60.0), abs=1e-4)
+    assert (dx[-1, 8], dy[-1, 8]) == pytest.approx((-24.0, 0.0), abs=1e-4)
+
+
+def test_sample_batch_equals_one_by_one(image):
+    grid = LogPolarGrid(20.0, 15.0, n_rho=16, n_theta=32)
+    centres = np.array([[90.0, 95.5], [101.25, 99.0]])
+    batch = grid.sample(image, centres, 1.3, 20.0)
+    for i, c in enumerate(centres):
+        assert np.array_equal(batch[i], grid.sample(image, c, 1.3, 20.0)[0])
+
+
+def test_spectrum_matches_textbook_fft(image):
+    """The optimised forward FFT equals numpy's rfft2 of the windowed, normalised image."""
+    grid = LogPolarGrid(RADIUS, RADIUS, n_rho=32, n_theta=64)
+    pc = PhaseCorrelator((32, 64))
+    lp = grid.sample(image, [CENTRE, (90.0, 110.0)], 1.0, 0.0).astype(np.float64)
+    w = pc.window.astype(np.float64)
+    mean = (lp * w).sum(axis=(-2, -1), keepdims=True) / w.sum()
+    centred = (lp - mean) * w
+    expected = np.fft.rfft2(centred / np.sqrt((centred ** 2).sum(axis=(-2, -1), keepdims=True)))
+    assert np.allclose(pc.spectrum(lp), expected, atol=1e-4 * np.abs(expected).max())
+
+
+def test_find_peaks_sub_bin_on_gaussian_surface():
+    k, j = np.mgrid[0:32, 0:64]
+    true = (5.3, -7.6)  # signed shift: -7.6 wraps to column 56.4
+    surface = np.exp(-((k - true[0]) ** 2 + (np.minimum(abs(j - 64 - true[1]), abs(j - true[1])) ** 2)) / 4.0)
+    p = find_peaks(surface[None])
+    assert (float(p.d_rho[0]), float(p.d_theta[0])) == pytest.approx(true, abs=1e-6)
+    assert float(p.height[0]) <= 1.0
+
+
+def test_parabola_peak_2d_exact_on_quadratic():
+    r, c = np.mgrid[0:7, 0:9]
+    scores = 1.0 - 0.1 * (r - 3.3) ** 2 - 0.05 * (c - 4.8) ** 2
+    row, col, best = parabola_peak_2d(scores)
+    assert (row, col) == pytest.approx((3.3, 4.8), abs=1e-9)
+    assert best == scores[3, 5]
+
+
+def test_parabola_peak_2d_not_refined_at_edge():
+    scores = np.array([[0.0, 0.5, 1.0]])
+    assert parabola_peak_2d(scores)[:2] == (0.0, 2.0)
+
+
+def test_to_gray_leaves_frame_alone():
+    frame = np.random.default_rng(0).integers(0, 255, (10, 12, 3), dtype=np.uint8)
+    before = frame.copy()
+    gray = to_gray(frame)
+    assert gray.dtype == np.float32 and gray.shape == (10, 12)
+    assert np.array_equal(frame, before)

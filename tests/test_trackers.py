@@ -1,0 +1,185 @@
+"""Trackers on synthetic sequences with exact ground truth (logpolar_track.synthetic).
+
+Conventions: centre in pixels, scale relative to frame 0, rotation in degrees counter-clockwise on screen,
+cumulative (unwrapped).
+"""
+
+import math
+from functools import lru_cache
+
+import cv2
+import numpy as np
+import pytest
+
+from logpolar_track.geometry import Ellipse
+from logpolar_track.synthetic import Pose, random_texture, render_frame, similarity_path, synthetic_sequence
+from logpolar_track.trackers import create_tracker, tracker_class, tracker_names
+
+#: The thesis' log-polar trackers, held to the issue's bounds.
+THESIS = ["fixed", "diffdecomp", "update", "occlusion"]
+
+
+def _is_peer(name):
+    return name.startswith("cv-") or not getattr(tracker_class(name), "measures_rotation", True)
+
+
+#: Every registered tracker of lptrack's own held to the same bounds (new ones are covered automatically);
+#: `spatial` is bounded by its grid and has its own test.
+ACCURATE = sorted(set(THESIS) | {n for n in tracker_names() if not _is_peer(n) and n != "spatial"},
+                  key=lambda n: (n not in THESIS, n))
+
+SHAPES = {"circle": Ellipse.circle(160, 110, 35), "ellipse": Ellipse(160, 110, 40, 26, 30)}
+
+
+@lru_cache(maxsize=None)
+def sequence(shape, turns, scale_range=(0.5, 2.0), n=70, radius_px=30.0, seed=0):
+    roi = SHAPES[shape]
+    poses = similarity_path(n, (roi.cx, roi.cy), scale_range=scale_range, turns=turns, radius_px=radius_px)
+    frames = list(synthetic_sequence(poses, roi, size=(320, 240), seed=seed))
+    return roi, poses, frames
+
+
+def track(name, roi, frames, **params):
+    tracker = create_tracker(name, **params)
+    first = tracker.init(frames[0], roi)
+    assert first.scale == 1.0 and first.rotation_deg == 0.0
+    return [tracker.update(f) for f in frames[1:]]
+
+
+def errors(results, poses):
+    centre = np.array([math.hypot(s.centre[0] - p.cx, s.centre[1] - p.cy) for (_, s), p in zip(results, poses[1:])])
+    scale = np.array([abs(s.scale / p.scale - 1) for (_, s), p in zip(results, poses[1:])])
+    rotation = np.array([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(results, poses[1:])])
+    lost = sum(not ok for ok, _ in results)
+    return centre, scale, rotation, lost
+
+
+def test_thesis_trackers_are_registered():
+    assert set(THESIS) <= set(tracker_names())
+    assert "spatial" in tracker_names()
+
+
+@pytest.mark.parametrize("turns", [1.3, -1.3], ids=["ccw", "cw"])
+@pytest.mark.parametrize("shape", sorted(SHAPES))
+@pytest.mark.parametrize("name", ACCURATE)
+def test_accuracy_scale_half_to_double_beyond_a_full_turn(name, shape, turns):
+    roi, poses, frames = sequence(shape, turns)
+    assert abs(poses[-1].rotation_deg) > 360 and min(p.scale for p in poses) < 0.55
+    centre, scale, rotation, lost = errors(track(name, roi, frames), poses)
+    assert lost == 0
+    assert np.median(centre) <= 1.0
+    assert np.median(scale) <= 0.02
+    assert np.median(rotation) <= 1.0
+
+
+@pytest.mark.parametrize("turns", [0.5, -0.5], ids=["ccw", "cw"])
+@pytest.mark.parametrize("shape", sorted(SHAPES))
+def test_spatial_accuracy_within_its_grid(shape, turns):
+    # The default grid follows at most 2 steps per frame: 4 % in scale and 4 degrees. This path moves at most
+    # ~2.6 degrees and ~2.7 % per frame.
+    roi, poses, frames = sequence(shape, turns, scale_range=(0.75, 1.35), n=80, radius_px=25.0)
+    centre, scale, rotation, lost = errors(track("spatial", roi, frames), poses)
+    assert lost == 0
+    assert np.median(centre) <= 0.5 and centre.max() <= 1.5
+    assert np.median(scale) <= 0.02          # one scale step
+    assert np.median(rotation) <= 1.0        # half an angle step
+
+
+def test_spatial_rejects_bad_grid():
+    with pytest.raises(ValueError, match="odd"):
+        create_tracker("spatial", n_angles=4)
+    with pytest.raises(ValueError, match="window"):
+        create_tracker("spatial", window=10)
+
+
+def _turned_pair(angle_deg, scale=1.0):
+    """Two frames built by hand: the second is the first turned ``angle_deg`` about the ROI's centre with
+    cv2.getRotationMatrix2D, whose positive angle is counter-clockwise on screen (independent of synthetic.py)."""
+    rng = np.random.default_rng(5)
+    frame = random_texture(240, 320, rng)
+    centre = (160.0, 120.0)
+    m = cv2.getRotationMatrix2D(centre, angle_deg, scale)
+    turned = cv2.warpAffine(frame, m, (320, 240), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
+    return Ellipse.circle(*centre, 40), frame, turned
+
+
+@pytest.mark.parametrize("name", ACCURATE + ["spatial"])
+def test_counter_clockwise_turn_on_screen_is_positive(name):
+    angle = 3.0 if name == "spatial" else 10.0  # spatial's default grid follows at most 4 degrees per frame
+    roi, frame, turned = _turned_pair(angle, 1.03)
+    ok, state = track(name, roi, [frame, turned])[0]
+    assert ok
+    assert state.rotation_deg == pytest.approx(angle, abs=1.0)
+    assert state.scale == pytest.approx(1.03, abs=0.01)
+    assert state.ellipse.angle_deg == pytest.approx(angle, abs=1.0)
+
+
+@pytest.mark.parametrize("name", THESIS)
+def test_two_full_turns_read_720(name):
+    roi = SHAPES["circle"]
+    poses = [Pose(roi.cx, roi.cy, 1.0, 720.0 * i / 48) for i in range(49)]  # 15 degrees per frame
+    frames = list(synthetic_sequence(poses, roi, size=(320, 240), seed=2))
+    results = track(name, roi, frames)
+    assert all(ok for ok, _ in results)
+    assert results[-1][1].rotation_deg == pytest.approx(720.0, abs=1.0)
+
+
+@pytest.mark.parametrize("name", ACCURATE + ["spatial"])
+def test_lost_when_object_replaced_then_found_again(name):
+    roi, poses, frames = sequence("circle", 0.15, scale_range=(0.9, 1.1), n=20, radius_px=10.0)
+    # The thesis trackers' default lost_threshold (0.2) sits on the noise floor: unrelated textures score
+    # 0.12-0.22 over an 11x11 window here while the object scores 0.45-0.65. Test them at 0.3.
+    tracker = create_tracker(name, **({"lost_threshold": 0.3} if name in THESIS else {}))
+    tracker.init(frames[0], roi)
+    for f in frames[1:10]:
+        ok, good = tracker.update(f)
+        assert ok
+    # Replace the object's disc with an unrelated texture.
+    rng = np.random.default_rng(77)
+    stranger = render_frame(frames[10], random_texture(90, 90, rng), roi,
+                            Pose(poses[9].cx, poses[9].cy, poses[9].scale, 0.0))
+    ok, state = tracker.update(stranger)
+    assert not ok
+    assert state.ellipse == good.ellipse and state.scale == good.scale and state.rotation_deg == good.rotation_deg
+    assert 0.0 <= state.score < tracker.lost_threshold
+    # It keeps searching and finds the object when it comes back.
+    ok, state = tracker.update(frames[10])
+    assert ok and math.hypot(state.centre[0] - poses[10].cx, state.centre[1] - poses[10].cy) < 1.0
+
+
+@pytest.mark.parametrize("name", ACCURATE + ["spatial"])
+def test_roi_partly_over_the_border_still_tracks(name):
+    roi = Ellipse.circle(25, 120, 35)  # a third of the disc hangs over the left edge
+    poses = [Pose(25 + 0.5 * i, 120 - 0.3 * i, 1.0 + 0.004 * i, 1.5 * i) for i in range(15)]
+    frames = list(synthetic_sequence(poses, roi, size=(320, 240), seed=4))
+    centre, scale, rotation, lost = errors(track(name, roi, frames), poses)
+    assert lost == 0
+    assert np.median(centre) <= 1.0 and np.median(scale) <= 0.02 and np.median(rotation) <= 1.0
+
+
+@pytest.mark.parametrize("name", THESIS)
+def test_coarse_to_fine_equals_exhaustive_reference(name):
+    """The fast path (coarse=True) gives the exhaustive full-size search's estimates up to float rounding."""
+    roi, poses, frames = sequence("ellipse", 1.3)
+    frames = frames[:30]
+    fast = track(name, roi, frames)
+    reference = track(name, roi, frames, coarse=False)
+    for (ok_f, f), (ok_r, r) in zip(fast, reference):
+        assert ok_f == ok_r
+        assert f.centre == pytest.approx(r.centre, abs=1e-3)
+        assert f.scale == pytest.approx(r.scale, rel=1e-4)
+        assert f.rotation_deg == pytest.approx(r.rotation_deg, abs=1e-3)
+        assert f.score == pytest.approx(r.score, abs=1e-4)
+
+
+@pytest.mark.parametrize("name", ACCURATE + ["spatial"])
+def test_frames_are_not_modified(name):
+    roi, _, frames = sequence("circle", 0.3, scale_range=(0.9, 1.1), n=3, radius_px=5.0)
+    copies = [f.copy() for f in frames]
+    track(name, roi, frames)
+    assert all(np.array_equal(a, b) for a, b in zip(frames, copies))
+
+
+def test_update_before_init_raises():
+    with pytest.raises(RuntimeError, match="init"):
+        create_tracker("fixed").update(np.zeros((10, 10, 3), np.uint8))

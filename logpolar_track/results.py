@@ -8,8 +8,8 @@ time_s         nominal time of the frame in seconds, ``frame / fps``
 cx, cy         centre in pixels (x right, y down, origin at the top-left corner of the frame)
 a, b           semi-axes of the tracked ellipse in pixels (the initial ROI's times ``scale``)
 angle_deg      direction of axis ``a`` in degrees counter-clockwise on screen: the initial ROI's angle plus
-               ``rotation_deg`` (not wrapped). For trackers that do not measure rotation it stays the
-               initial angle.
+               ``rotation_deg``, wrapped into (-180, 180] as in the ``.gt.csv`` sidecars. For trackers that
+               do not measure rotation it stays the initial angle.
 scale          size relative to the first row (1 in the first row)
 rotation_deg   cumulative (unwrapped) counter-clockwise rotation since the first row, in degrees; **empty**
                for trackers that do not measure rotation
@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import IO
 
 from .errors import OutputError
+from .geometry import wrap_degrees
 from .trackers.base import TrackState
 from .video import check_output_path, temporary_path
 
@@ -92,13 +93,14 @@ def format_row(result: FrameResult, *, initial_angle_deg: float | None = None) -
     initial_angle_deg : float, optional
         The initial ROI's angle in degrees. When the tracker does not measure rotation
         (``state.rotation_deg is None``), ``angle_deg`` is written as this value and ``rotation_deg`` empty.
-        Without it, ``angle_deg`` comes from the state's ellipse.
+        Without it, ``angle_deg`` comes from the state's ellipse. Either way it is wrapped into (-180, 180].
     """
     state = result.state
     e = state.ellipse
     angle = e.angle_deg
     if state.rotation_deg is None and initial_angle_deg is not None:
         angle = initial_angle_deg
+    angle = wrap_degrees(round(angle, 3))  # round first so 180.0004 and -179.9996 both print as 180.000
     return [str(int(result.frame)), _number(result.time_s, 6),
             _number(e.cx, 3), _number(e.cy, 3), _number(e.a, 3), _number(e.b, 3), _number(angle, 3),
             _number(state.scale, 5), _number(state.rotation_deg, 3), _number(state.score, 4), result.status]

@@ -25,7 +25,7 @@ from logpolar_track.errors import RoiError
 from logpolar_track.geometry import Ellipse
 from logpolar_track.pipeline import read_roi_sidecar, run_video, track_video
 from logpolar_track.results import COLUMNS
-from logpolar_track.trackers import tracker_names
+from logpolar_track.trackers import Tracker, TrackState, tracker_names
 
 HEADER = "frame,time_s,cx,cy,a,b,angle_deg,scale,rotation_deg,score,status"
 
@@ -250,21 +250,30 @@ def test_track_video_yields_init_then_one_result_per_frame(tiny_video):
     assert [r.frame for r in results] == list(range(tiny_video.n_frames))
 
 
+class Still(Tracker):
+    """A stand-in tracker without rotation that never finds the object after init."""
+
+    name = "still-test"
+    measures_rotation = False
+
+    def init(self, frame, roi):
+        self.state = TrackState(roi, 1.0, None, 1.0)
+        return self.state
+
+    def update(self, frame):
+        return False, self.state
+
+
 def test_track_video_accepts_a_tracker_instance(tiny_video):
-    from logpolar_track.trackers import Tracker, TrackState
-
-    class Still(Tracker):
-        name = "still-test"
-
-        def init(self, frame, roi):
-            self.state = TrackState(roi, 1.0, None, 1.0)
-            return self.state
-
-        def update(self, frame):
-            return frame.mean() > 1e9, self.state  # never "found": every later frame is lost
-
     results = list(track_video(tiny_video.path, Ellipse.circle(80, 60, 20), Still()))
     assert [r.status for r in results] == ["init"] + ["lost"] * (tiny_video.n_frames - 1)
+
+
+def test_tracker_without_rotation_leaves_rotation_empty(tiny_video, tmp_path):
+    summary = run_video(tiny_video.path, "80,60,24,16,30", tracker=Still(), csv_out=tmp_path / "t.csv")
+    assert summary.lost == tiny_video.n_frames - 1 and summary.tracker == "still-test"
+    rows = read_rows((tmp_path / "t.csv").read_text())
+    assert {r["rotation_deg"] for r in rows} == {""} and {r["angle_deg"] for r in rows} == {"30.000"}
 
 
 def test_run_video_summary(tiny_video, tmp_path):

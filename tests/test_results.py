@@ -36,6 +36,14 @@ def test_no_negative_zero():
     assert row["rotation_deg"] == "0.000" and row["angle_deg"] == "0.000"
 
 
+@pytest.mark.parametrize("angle, text", [(30.0 + 720.0, "30.000"), (180.0, "180.000"), (-180.0, "180.000"),
+                                         (-179.9996, "180.000"), (-190.0, "170.000"), (900.0, "180.000")])
+def test_angle_is_wrapped_rotation_is_not(angle, text):
+    row = dict(zip(COLUMNS, format_row(_result(rotation=angle - 30.0, angle=angle))))
+    assert row["angle_deg"] == text
+    assert row["rotation_deg"] == f"{angle - 30.0:.3f}"
+
+
 def test_tracker_without_rotation_writes_empty_rotation_and_initial_angle():
     result = _result(rotation=None, angle=99.0)
     row = dict(zip(COLUMNS, format_row(result, initial_angle_deg=30.0)))

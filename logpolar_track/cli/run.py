@@ -18,13 +18,35 @@ from . import EXIT_FAILURE, main
 
 
 class OneLineErrors(click.Command):
-    """A command whose argument errors are one ``lptrack: error:`` line (exit 2), not click's usage block."""
+    """A command whose argument errors are one ``lptrack: error:`` line (exit 2), not click's usage block.
+
+    Its epilog is built when help is shown, so it lists trackers registered after this module was imported.
+    """
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         try:
             return super().parse_args(ctx, args)
         except click.UsageError as exc:
             raise UsageError(f"{exc.format_message()} (see 'lptrack {self.name} --help')") from None
+
+    def format_epilog(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        self.epilog = _epilog()
+        super().format_epilog(ctx, formatter)
+
+
+class TrackerChoice(click.Choice):
+    """``click.Choice`` over the tracker registry, read when used (trackers may register after import)."""
+
+    def __init__(self) -> None:
+        super().__init__((), case_sensitive=True)
+
+    @property
+    def choices(self) -> tuple[str, ...]:
+        return tuple(tracker_names(include_unavailable=True))
+
+    @choices.setter
+    def choices(self, value) -> None:  # click.Choice.__init__ assigns; the registry is the source instead
+        pass
 
 
 def _tracker_lines() -> str:
@@ -40,7 +62,9 @@ def _tracker_lines() -> str:
     return "\n".join(lines)
 
 
-_EPILOG = f"""\b
+def _epilog() -> str:
+    """Help text after the options: ROI syntax, CSV columns, the registered trackers, examples."""
+    return f"""\b
 ROI (--roi, or one line in a sidecar file VIDEO-stem.roi next to the video):
   cx,cy,r          circle: centre and radius in pixels
   cx,cy,a,b,angle  ellipse: semi-axes a, b in pixels; angle of axis a in
@@ -67,13 +91,13 @@ Examples:
 """
 
 
-@main.command("run", cls=OneLineErrors, epilog=_EPILOG)
+@main.command("run", cls=OneLineErrors)
 @click.argument("video", type=click.Path(dir_okay=True, path_type=Path), metavar="VIDEO")
 @click.option("--roi", "roi_spec", metavar="SPEC",
               help="Object on the start frame: 'cx,cy,r' or 'cx,cy,a,b,angle' (pixels; degrees CCW). "
                    "Default: read from VIDEO's .roi sidecar.")
-@click.option("--tracker", type=click.Choice(tracker_names(include_unavailable=True)), default=DEFAULT_TRACKER,
-              show_default=True, help="Tracking method (see the list below).")
+@click.option("--tracker", type=TrackerChoice(), default=DEFAULT_TRACKER, show_default=True, metavar="NAME",
+              help="Tracking method (see the list below).")
 @click.option("--start-frame", type=click.IntRange(min=0), default=0, show_default=True, metavar="N",
               help="Frame index (0 = first) the ROI refers to; tracking starts there.")
 @click.option("--out", "video_out", type=click.Path(dir_okay=False, path_type=Path), metavar="VIDEO_OUT",

@@ -62,3 +62,4 @@ def fail(message: str, code: int = EXIT_USAGE) -> "None":
 # Sub-commands register themselves on `main` when imported; one import line per command module.
 # --- command modules ---
 from . import run  # noqa: E402,F401
+from . import bench  # noqa: E402,F401

@@ -1,0 +1,441 @@
+"""Run trackers over sequences with ground truth and compare them: tables, a JSON document, plots.
+
+The unit of work is :func:`run_one` (one tracker on one sequence), a picklable top-level function, so local
+process pools (``--jobs``) and other executors can share it. Accuracy metrics are those of
+:mod:`logpolar_track.evaluate`; speed is the tracker's ``update()`` time alone (``time.perf_counter`` around
+each call; decoding, ``init()`` and scoring excluded), reported as frames per second.
+
+Summary rows average each per-sequence number over the sequences (every sequence weighs the same, as in OTB's
+overall plots); the summary frames/s is total updated frames over total update time.
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+import os
+import platform
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Callable, Iterable, Mapping
+
+import numpy as np
+
+from . import __version__
+from .datasets import Sequence, discover
+from .errors import OutputError, UsageError
+from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
+                       auc, score_track)
+from .trackers import create_tracker, tracker_class, tracker_names
+from .trackers import opencv as _opencv_peers  # noqa: F401  (registers cv-mil, cv-kcf, cv-csrt)
+
+#: Version of the JSON document written by :func:`bench_document`; bump on incompatible changes.
+SCHEMA_VERSION = 1
+#: Per-frame arrays kept in each result; dropped from the JSON document unless asked for.
+PER_FRAME_KEYS = ("frames", "iou", "centre_error_px")
+
+
+def default_dataset() -> Path | None:
+    """The project's ``sample_videos/`` folder: beside the package in a checkout, else in the working folder."""
+    for candidate in (Path(__file__).resolve().parents[1] / "sample_videos", Path.cwd() / "sample_videos"):
+        if candidate.is_dir():
+            return candidate
+    return None
+
+
+def resolve_trackers(spec: str | None) -> tuple[list[str], list[tuple[str, str]]]:
+    """Tracker names to run from a comma-separated ``spec`` (None: every available tracker).
+
+    Returns
+    -------
+    names : list of str
+        Available trackers, in the order given (duplicates removed).
+    skipped : list of (name, reason)
+        Registered trackers that were asked for but cannot run here (e.g. contrib-only OpenCV peers).
+
+    Raises
+    ------
+    UsageError
+        For a name that is not registered at all, or an empty list.
+    """
+    if spec is None:
+        names = tracker_names(include_unavailable=True)
+    else:
+        names = list(dict.fromkeys(n.strip() for n in spec.split(",") if n.strip()))
+        if not names:
+            raise UsageError("--trackers is empty; give comma-separated names from: "
+                             + ", ".join(tracker_names(include_unavailable=True)))
+    known = tracker_names(include_unavailable=True)
+    for name in names:
+        if name not in known:
+            raise UsageError(f"unknown tracker '{name}'; choose from: {', '.join(known)}")
+    available, skipped = [], []
+    for name in names:
+        cls = tracker_class(name)
+        if getattr(cls, "available", lambda: True)():
+            available.append(name)
+        else:
+            skipped.append((name, cls.unavailable_reason()))
+    return available, skipped
+
+
+def collect_sequences(datasets: Iterable) -> list[Sequence]:
+    """All sequences of the given dataset folders, in order.
+
+    Raises
+    ------
+    UsageError
+        If a dataset holds no recognisable sequence, or two sequences share a name.
+    """
+    sequences: list[Sequence] = []
+    for dataset in datasets:
+        found = discover(dataset)
+        if not found:
+            raise UsageError(f"no sequences found in '{dataset}'; expected videos with .gt.csv sidecars, or "
+                             "OTB (img/ + groundtruth_rect.txt), VOT (groundtruth.txt + frames), UAV123 "
+                             "(img/ + <name>.txt) folders, or a folder of such folders")
+        sequences.extend(found)
+    names = [s.name for s in sequences]
+    dupes = sorted({n for n in names if names.count(n) > 1})
+    if dupes:
+        raise UsageError(f"several sequences are called {', '.join(dupes)}; give datasets whose names differ")
+    return sequences
+
+
+def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None) -> dict:
+    """Run one tracker over one sequence and score it.
+
+    Parameters
+    ----------
+    sequence : Sequence or path-like
+        The sequence, or a path :func:`~logpolar_track.datasets.discover` resolves to exactly one.
+    tracker_name : str
+        Registered tracker name.
+    params : mapping, optional
+        ``{"tracker_params": {name: {keyword: value}}}``: keyword tuning passed to the tracker.
+
+    Returns
+    -------
+    dict
+        ``sequence``, ``tracker``, ``frames`` (decoded), ``updates`` (frames passed to ``update``),
+        ``lost_frames``, ``update_time_s``, ``fps`` (updates per second of update time), ``error`` (None, or
+        the message of an exception that stopped the run; then the numbers cover the frames before it), and
+        every key of :func:`~logpolar_track.evaluate.score_track`.
+    """
+    if not isinstance(sequence, Sequence):
+        found = discover(sequence)
+        if len(found) != 1:
+            raise UsageError(f"'{sequence}' holds {len(found)} sequences; run_one takes one")
+        sequence = found[0]
+    params = dict(params or {})
+    tracker_params = dict((params.get("tracker_params") or {}).get(tracker_name, {}))
+    rows: list[tuple] = []
+    update_time, updates, lost, error = 0.0, 0, 0, None
+    try:
+        tracker = create_tracker(tracker_name, **tracker_params)
+        for index, _time_s, frame in sequence.frames():
+            if index < sequence.start:
+                continue
+            if index == sequence.start:
+                state, ok = tracker.init(frame, sequence.roi), True
+            else:
+                t0 = time.perf_counter()
+                ok, state = tracker.update(frame)
+                update_time += time.perf_counter() - t0
+                updates += 1
+                lost += not ok
+            e = state.ellipse
+            rot = math.nan if state.rotation_deg is None else state.rotation_deg
+            rows.append((index, e.cx, e.cy, e.a, e.b, e.angle_deg, state.scale, rot, state.score))
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:  # one failing pair must not sink the whole benchmark; it is reported
+        error = f"{type(exc).__name__}: {exc}"
+    table = np.array(rows, float).reshape(-1, 9)
+    track = Track(table[:, 0].astype(int), table[:, 1:6], table[:, 6], table[:, 7], table[:, 8])
+    result = {"sequence": sequence.name, "tracker": tracker_name, "frames": len(rows) + sequence.start,
+              "updates": updates, "lost_frames": lost, "update_time_s": update_time,
+              "fps": updates / update_time if update_time > 0 else math.nan, "error": error}
+    result.update(score_track(sequence.gt, track))
+    return result
+
+
+def run_bench(sequences: list[Sequence], trackers: list[str], *, params: Mapping | None = None, jobs: int = 1,
+              on_result: Callable[[dict], None] | None = None) -> list[dict]:
+    """Run every tracker on every sequence; results in (sequence, tracker) order whatever ``jobs`` is.
+
+    Parameters
+    ----------
+    jobs : int
+        Worker processes (``concurrent.futures.ProcessPoolExecutor``, a fresh process per pair); 1 runs in this
+        process. Several jobs share the CPU, so frames/s figures are only comparable between runs with the
+        same ``jobs``. OpenCV's MIL gives repeatable results only per fresh process (jobs >= 2): run in one
+        process one after another, its numbers vary slightly with what ran before.
+    on_result : callable, optional
+        Called with each result as it completes (progress display).
+    """
+    pairs = [(s, t) for s in sequences for t in trackers]
+    if jobs <= 1 or len(pairs) <= 1:
+        results = []
+        for s, t in pairs:
+            results.append(run_one(s, t, params))
+            if on_result:
+                on_result(results[-1])
+        return results
+    # One fresh process per pair: OpenCV's MIL draws from a generator inside OpenCV that Python cannot reseed,
+    # so its result depends on what ran before in the same process; a fresh worker makes every pair repeatable
+    # whatever the order. "spawn" because max_tasks_per_child rules out "fork".
+    ctx = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=min(jobs, len(pairs)), mp_context=ctx, max_tasks_per_child=1) as pool:
+        futures = [pool.submit(run_one, s, t, params) for s, t in pairs]
+        for future in as_completed(futures):
+            if on_result:
+                on_result(future.result())
+        return [f.result() for f in futures]
+
+
+def _mean(values) -> float | None:
+    vals = [v for v in values if v is not None and math.isfinite(v)]
+    return float(np.mean(vals)) if vals else None
+
+
+def summarise(results: list[dict], trackers: list[str]) -> list[dict]:
+    """One summary per tracker: means over its sequences (see module notes), total frames/s, curves."""
+    out = []
+    for name in trackers:
+        rs = [r for r in results if r["tracker"] == name]
+        time_s = sum(r["update_time_s"] for r in rs)
+        updates = sum(r["updates"] for r in rs)
+        curves = [r["success_curve"] for r in rs if r["frames_scored"]]
+        precs = [r["precision_curve"] for r in rs if r["frames_scored"]]
+        succ = np.mean(curves, axis=0) if curves else np.full(len(IOU_THRESHOLDS), np.nan)
+        out.append({
+            "tracker": name,
+            "sequences": len(rs),
+            "errors": sum(r["error"] is not None for r in rs),
+            "frames_scored": sum(r["frames_scored"] for r in rs),
+            "success_rate": _mean(r["success_rate"] for r in rs),
+            "auc": _mean(r["auc"] for r in rs),
+            "precision_20": _mean(r["precision_20"] for r in rs),
+            "centre_error_median_px": _mean(r["centre_error_median_px"] for r in rs),
+            "scale_error_median_pct": _mean(r["scale_error_median_pct"] for r in rs),
+            "rotation_error_median_deg": _mean(r["rotation_error_median_deg"] for r in rs),
+            "fps": updates / time_s if time_s > 0 else None,
+            "success_curve": succ.tolist(),
+            "success_curve_auc": auc(succ) if curves else None,
+            "precision_curve": (np.mean(precs, axis=0) if precs else
+                                np.full(len(PRECISION_THRESHOLDS), np.nan)).tolist(),
+        })
+    return out
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Reports
+# ----------------------------------------------------------------------------------------------------------
+
+_COLUMNS = (  # header, key, format: fraction shown as percent ("pct"), or a format spec
+    ("frames", "frames_scored", "d"),
+    ("success%", "success_rate", "pct"),
+    ("AUC", "auc", ".3f"),
+    ("prec@20%", "precision_20", "pct"),
+    ("centre_px", "centre_error_median_px", ".1f"),
+    ("scale_err%", "scale_error_median_pct", ".1f"),
+    ("rot_err_deg", "rotation_error_median_deg", ".1f"),
+    ("fps", "fps", ".1f"),
+)
+
+
+def _cell(value, fmt: str) -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "n/a"
+    if fmt == "pct":
+        return f"{100 * value:.1f}"
+    return format(value, fmt)
+
+
+def format_table(results: list[dict], summary: list[dict], *, speed: bool = True) -> str:
+    """Plain-text table, columns aligned: one row per (sequence, tracker), then one ``mean`` row per tracker.
+
+    Rates are percentages of scored frames; errors are medians (px, %, degrees); ``n/a`` where a number is
+    undefined (e.g. rotation for trackers or ground truth without an angle); ``fps`` (left out when ``speed``
+    is False) is update()-only speed.
+    """
+    columns = _COLUMNS if speed else tuple(c for c in _COLUMNS if c[1] != "fps")
+    header = ["sequence", "tracker"] + [c[0] for c in columns]
+    rows = []
+    for r in results:
+        row = [r["sequence"], r["tracker"]] + [_cell(r.get(key), fmt) for _, key, fmt in columns]
+        if r.get("error"):
+            row[1] += " (failed)"
+        rows.append(row)
+    if summary:
+        rows.append(None)
+        n_seq = max(s["sequences"] for s in summary)
+        for s in summary:
+            rows.append([f"mean ({n_seq})", s["tracker"]] + [_cell(s.get(key), fmt) for _, key, fmt in columns])
+    widths = [max(len(header[i]), *(len(r[i]) for r in rows if r)) for i in range(len(header))]
+
+    def line(cells):
+        return "  ".join(c.ljust(w) if i < 2 else c.rjust(w) for i, (c, w) in enumerate(zip(cells, widths)))
+
+    out = [line(header), line(["-" * w for w in widths])]
+    out += [line(r) if r else line(["-" * w for w in widths]) for r in rows]
+    return "\n".join(out) + "\n"
+
+
+def _opencv_flavour() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    for dist in ("opencv-contrib-python-headless", "opencv-contrib-python", "opencv-python-headless",
+                 "opencv-python"):
+        try:
+            return f"{dist} {version(dist)}"
+        except PackageNotFoundError:
+            continue
+    return "unknown"
+
+
+def environment() -> dict:
+    """Versions of lptrack, Python, NumPy and OpenCV, and a description of the machine."""
+    import cv2
+
+    return {
+        "versions": {"lptrack": __version__, "python": platform.python_version(), "numpy": np.__version__,
+                     "opencv": cv2.__version__, "opencv_package": _opencv_flavour()},
+        "machine": {"platform": platform.platform(), "machine": platform.machine(),
+                    "processor": platform.processor(), "cpu_count": os.cpu_count()},
+    }
+
+
+def _clean(value):
+    """JSON-safe copy: NaN/inf become None, numpy scalars become Python numbers."""
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _clean(value.tolist())
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def bench_document(results: list[dict], summary: list[dict], sequences: list[Sequence], *,
+                   parameters: Mapping, skipped: list[tuple[str, str]] = (), per_frame: bool = False) -> dict:
+    """The whole benchmark as one JSON-ready document (``schema_version`` :data:`SCHEMA_VERSION`).
+
+    Keys: ``schema_version``, ``tool``, ``created`` (UTC, ISO 8601), ``versions``, ``machine``, ``parameters``
+    (with the metric definitions' constants), ``sequences``, ``skipped_trackers``, ``results`` (one per
+    sequence and tracker, curves included; per-frame ``frames``/``iou``/``centre_error_px`` only with
+    ``per_frame``), ``summary`` (one per tracker). Undefined numbers are null.
+    """
+    env = environment()
+    kept = [r if per_frame else {k: v for k, v in r.items() if k not in PER_FRAME_KEYS} for r in results]
+    params = dict(parameters)
+    params.update({"success_radius_fraction": SUCCESS_RADIUS_FRACTION, "precision_px": PRECISION_PX,
+                   "iou_thresholds": IOU_THRESHOLDS.tolist(), "precision_thresholds_px": PRECISION_THRESHOLDS.tolist(),
+                   "speed": "tracker update() only, time.perf_counter; decoding, init and scoring excluded"})
+    return _clean({
+        "schema_version": SCHEMA_VERSION,
+        "tool": "lptrack bench",
+        "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "versions": env["versions"],
+        "machine": env["machine"],
+        "parameters": params,
+        "sequences": [s.describe() for s in sequences],
+        "skipped_trackers": [{"tracker": n, "reason": why} for n, why in skipped],
+        "results": kept,
+        "summary": summary,
+    })
+
+
+def write_text_atomic(path, text: str) -> None:
+    """Write ``text`` to ``path`` via a temporary file in the same folder, renamed when complete.
+
+    Raises
+    ------
+    OutputError
+        If the folder does not exist or is not writable.
+    """
+    path = Path(path)
+    if not path.parent.is_dir():
+        raise OutputError(f"cannot write '{path}': folder '{path.parent}' does not exist")
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise OutputError(f"cannot write '{path}': {exc.strerror or exc}") from None
+
+
+def matplotlib_missing() -> str | None:
+    """None if matplotlib can be imported, else a one-line hint on how to install it."""
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        return "--plot needs matplotlib, which is not installed; install it with: pip install 'lptrack[plot]'"
+    return None
+
+
+def plot_curves(summary: list[dict], path) -> None:
+    """Save OTB-style success (IoU) and precision (centre error) plots, one curve per tracker, as a PNG.
+
+    The legend gives each tracker's success AUC and precision at 20 px (means over sequences).
+
+    Raises
+    ------
+    UsageError
+        If matplotlib is not installed.
+    OutputError
+        If the file cannot be written.
+    """
+    hint = matplotlib_missing()
+    if hint:
+        raise UsageError(hint)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    if not path.parent.is_dir():
+        raise OutputError(f"cannot write '{path}': folder '{path.parent}' does not exist")
+    fig, (ax_s, ax_p) = plt.subplots(1, 2, figsize=(11, 4.5))
+    for s in sorted(summary, key=lambda s: -(s["auc"] or 0)):
+        ax_s.plot(IOU_THRESHOLDS, s["success_curve"], label=f"{s['tracker']} [{_cell(s['auc'], '.3f')}]")
+    for s in sorted(summary, key=lambda s: -(s["precision_20"] or 0)):
+        ax_p.plot(PRECISION_THRESHOLDS, s["precision_curve"],
+                  label=f"{s['tracker']} [{_cell(s['precision_20'], '.3f')}]")
+    ax_s.set(title="Success plot", xlabel="IoU threshold", ylabel="success rate", xlim=(0, 1), ylim=(0, 1))
+    ax_p.set(title="Precision plot", xlabel="centre error threshold (px)", ylabel="precision",
+             xlim=(0, PRECISION_THRESHOLDS[-1]), ylim=(0, 1))
+    for ax in (ax_s, ax_p):
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="lower left" if ax is ax_s else "lower right")
+    fig.tight_layout()
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
+    try:
+        fig.savefig(tmp, dpi=100)
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise OutputError(f"cannot write '{path}': {exc.strerror or exc}") from None
+    finally:
+        plt.close(fig)
+
+
+def eval_document(pred_path, gt_path, metrics: dict, *, per_frame: bool = True) -> dict:
+    """JSON-ready document of ``lptrack eval``: inputs, metric constants and every metric."""
+    kept = metrics if per_frame else {k: v for k, v in metrics.items() if k not in PER_FRAME_KEYS}
+    return _clean({"schema_version": SCHEMA_VERSION, "tool": "lptrack eval", "prediction": str(pred_path),
+                   "ground_truth": str(gt_path), "success_radius_fraction": SUCCESS_RADIUS_FRACTION,
+                   "precision_px": PRECISION_PX, "metrics": kept})
+
+
+__all__ = ["run_one", "run_bench", "summarise", "format_table", "bench_document", "eval_document",
+           "plot_curves", "resolve_trackers", "collect_sequences", "default_dataset", "write_text_atomic",
+           "matplotlib_missing", "environment", "SCHEMA_VERSION"]

@@ -1,0 +1,173 @@
+"""``lptrack bench`` (trackers side by side on sequences with ground truth) and ``lptrack eval`` (score a CSV)."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import click
+
+from ..bench import (bench_document, collect_sequences, default_dataset, eval_document, format_table,
+                     matplotlib_missing, plot_curves, resolve_trackers, run_bench, summarise, write_text_atomic)
+from ..errors import UsageError
+from . import EXIT_FAILURE, main
+
+
+class _OneLineErrors(click.Command):
+    """A command whose argument errors are one ``lptrack: error:`` line (exit 2), not click's usage block."""
+
+    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+        try:
+            return super().parse_args(ctx, args)
+        except click.UsageError as exc:
+            raise UsageError(f"{exc.format_message()} (see 'lptrack {self.name} --help')") from None
+
+
+_BENCH_EPILOG = """\b
+Datasets (--dataset, repeatable; default: the project's sample_videos/):
+  lptrack samples  <name>.mp4 + <name>.gt.csv (+ <name>.roi)
+  OTB              img/0001.jpg... + groundtruth_rect.txt (x,y,w,h, 1-based)
+  VOT              frames (or imgs/, color/) + groundtruth.txt (x,y,w,h or
+                   8-number rotated quadrilateral)
+  UAV123           img/ + <name>.txt (x,y,w,h, 1-based)
+  or a folder of such folders. Trackers start on the first frame with ground
+  truth from the ellipse inscribed in its box; frames without ground truth
+  (NaN lines, more frames than lines) are not scored.
+
+\b
+Columns (per sequence and tracker; 'mean' rows average over sequences):
+  success%     frames with centre error < 25% of the object's radius
+               (radius = sqrt(w*h)/2 of the ground-truth box)
+  AUC          area under the OTB success curve (IoU > t, 21 thresholds)
+  prec@20%     frames with centre error <= 20 px
+  centre_px    median centre error, pixels
+  scale_err%   median |scale / true scale - 1|
+  rot_err_deg  median rotation error (ground truth with an angle only;
+               modulo 180 for rectangles); n/a for OpenCV's trackers
+  fps          tracker update() calls per second (decoding excluded)
+
+\b
+Examples:
+  lptrack bench
+  lptrack bench --dataset ../shared/data --trackers fixed,cv-mil --json res.json
+  lptrack bench --trackers cv-csrt,cv-kcf --json - > res.json
+"""
+
+
+@main.command("bench", cls=_OneLineErrors, epilog=_BENCH_EPILOG)
+@click.option("--dataset", "datasets", multiple=True, metavar="DIR",
+              type=click.Path(exists=True, path_type=Path),
+              help="Folder of sequences (repeatable). Default: sample_videos/ of the project.")
+@click.option("--trackers", metavar="A,B,...",
+              help="Comma-separated tracker names. Default: every available lptrack tracker and OpenCV peer.")
+@click.option("--json", "json_out", metavar="PATH|-",
+              help="Write every number, versions, machine and parameters as JSON; '-' for stdout (then the "
+                   "table goes to stderr).")
+@click.option("--per-frame", is_flag=True, help="Include per-frame IoU and centre error arrays in the JSON.")
+@click.option("--plot", "plot_out", metavar="PATH.png", type=click.Path(dir_okay=False, path_type=Path),
+              help="Save success and precision plots (needs matplotlib: pip install 'lptrack[plot]').")
+@click.option("--jobs", type=click.IntRange(min=1), default=1, show_default=True, metavar="N",
+              help="Run (sequence, tracker) pairs in N processes. Speeds are only comparable at equal N.")
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar and no notes on stderr.")
+def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None, per_frame: bool,
+          plot_out: Path | None, jobs: int, quiet: bool) -> None:
+    """Run trackers over sequences with ground truth and compare them.
+
+    Prints one row per sequence and tracker and a mean row per tracker:
+    success rate, IoU success AUC, precision at 20 px, median centre, scale
+    and rotation errors, and tracker frames/s.
+    """
+    if plot_out is not None:
+        hint = matplotlib_missing()
+        if hint:
+            raise UsageError(hint)
+    if not datasets:
+        found = default_dataset()
+        if found is None:
+            raise UsageError("no --dataset given and no sample_videos/ folder found beside the package or in "
+                             "the current folder; give --dataset DIR")
+        datasets = (found,)
+    names, skipped = resolve_trackers(trackers)
+    if not quiet:
+        for name, reason in skipped:
+            click.echo(f"lptrack: note: skipping {name}: {reason}", err=True)
+    if not names:
+        raise UsageError("none of the requested trackers can run here")
+    sequences = collect_sequences(datasets)
+
+    show_progress = not quiet and sys.stderr.isatty()
+    bar = None
+    if show_progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(sequences) * len(names), unit="run", file=sys.stderr, leave=False)
+
+    def progress(result: dict) -> None:
+        if bar is not None:
+            bar.set_postfix_str(f"{result['sequence']}/{result['tracker']}")
+            bar.update(1)
+
+    try:
+        results = run_bench(sequences, names, jobs=jobs, on_result=progress)
+    finally:
+        if bar is not None:
+            bar.close()
+    summary = summarise(results, names)
+    table = format_table(results, summary)
+    parameters = {"datasets": [str(d) for d in datasets], "trackers": names, "jobs": jobs}
+    failed = [r for r in results if r["error"]]
+    if json_out is not None:
+        doc = bench_document(results, summary, sequences, parameters=parameters, skipped=skipped,
+                             per_frame=per_frame)
+        text = json.dumps(doc, indent=1) + "\n"
+        if json_out == "-":
+            click.echo(table, err=True, nl=False)
+            sys.stdout.write(text)
+            sys.stdout.flush()
+        else:
+            write_text_atomic(json_out, text)
+    if json_out != "-":
+        click.echo(table, nl=False)
+    if plot_out is not None:
+        plot_curves(summary, plot_out)
+    for r in failed:
+        click.echo(f"lptrack: error: {r['tracker']} failed on {r['sequence']}: {r['error']}", err=True)
+    if failed:
+        sys.exit(EXIT_FAILURE)
+
+
+@main.command("eval", cls=_OneLineErrors)
+@click.argument("prediction", metavar="PRED.csv", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.argument("ground_truth", metavar="GT", type=click.Path(exists=True, path_type=Path))
+@click.option("--json", "json_out", metavar="PATH|-", help="Write the metrics (and per-frame arrays) as JSON; "
+                                                           "'-' for stdout instead of the table.")
+def eval_command(prediction: Path, ground_truth: Path, json_out: str | None) -> None:
+    """Score a run's CSV (PRED.csv from 'lptrack run') against ground truth GT.
+
+    GT is a <name>.gt.csv, an OTB groundtruth_rect.txt, a VOT groundtruth.txt,
+    a UAV123 <name>.txt, or a sequence folder holding one of them. Frames are
+    matched by index (line k of a .txt file is frame k-1); the metrics are
+    those of 'lptrack bench' (see 'lptrack bench --help').
+    """
+    from ..datasets import load_ground_truth
+    from ..evaluate import read_track_csv, score_track
+
+    track = read_track_csv(prediction)
+    gt = load_ground_truth(ground_truth)
+    metrics = score_track(gt, track)
+    if metrics["frames_scored"] == 0:
+        raise UsageError(f"no frame of '{prediction}' has ground truth in '{ground_truth}' (frames are matched "
+                         "by index, 0 = first frame)")
+    row = {"sequence": prediction.name, "tracker": "(csv)", **metrics}
+    table = format_table([row], [], speed=False)
+    if json_out is None:
+        click.echo(table, nl=False)
+        return
+    text = json.dumps(eval_document(prediction, ground_truth, metrics), indent=1) + "\n"
+    if json_out == "-":
+        sys.stdout.write(text)
+        sys.stdout.flush()
+    else:
+        write_text_atomic(json_out, text)
+        click.echo(table, nl=False)

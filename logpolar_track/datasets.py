@@ -1,0 +1,296 @@
+"""Sequences with ground truth: lptrack's sample videos and public benchmark folders (OTB, VOT, UAV123).
+
+:func:`discover` finds every sequence under a folder; a :class:`Sequence` streams its frames (one decoded at a
+time) and carries its ground truth (:class:`~logpolar_track.evaluate.GroundTruth`) and initial ROI.
+
+Layouts recognised (file names case-sensitive as published):
+
+lptrack samples
+    ``<name>.mp4`` (or ``.avi``, ``.mkv``, ``.mov``, ``.webm``) with ``<name>.gt.csv`` beside it; initial ROI
+    from ``<name>.roi`` (one line in ``--roi`` syntax) or else the first ground-truth ellipse.
+OTB
+    ``img/0001.jpg ...`` + ``groundtruth_rect.txt`` (x,y,w,h, 1-based; several targets as
+    ``groundtruth_rect.1.txt``, ``.2.txt``: one sequence each).
+VOT
+    frames in the folder itself, in ``imgs/`` or in ``color/`` + ``groundtruth.txt`` (x,y,w,h or an 8-number
+    quadrilateral per line, 0-based).
+UAV123
+    ``img/`` + ``<folder name>.txt`` (x,y,w,h, 1-based).
+
+Line ``k`` of a benchmark ground-truth file belongs to the ``k``-th frame image in natural sort order. Frames
+without a ground-truth line (more frames than lines), NaN lines and empty boxes are not scored. The tracker is
+started on the first frame that has ground truth, from the ellipse inscribed in that box (rotated rectangle
+for VOT polygons). Image sequences carry no frame rate; ``time_s`` assumes :data:`IMAGE_FPS`.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+
+from .errors import RoiError, UsageError, VideoError
+from .evaluate import GroundTruth, GroundTruthError, read_box_text, read_gt_csv
+from .geometry import Ellipse, parse_roi
+
+#: Frame rate assumed for image sequences (OTB and VOT are mostly 30 fps captures), frames per second.
+IMAGE_FPS = 30.0
+IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff")
+VIDEO_EXTENSIONS = (".mp4", ".avi", ".mkv", ".mov", ".webm", ".m4v")
+_MAX_DEPTH = 3
+
+
+@dataclass
+class Sequence:
+    """One sequence: where its frames are, its ground truth and its initial ROI. Picklable, small.
+
+    Attributes
+    ----------
+    name : str
+        Display name (folder name or video stem).
+    kind : str
+        ``lptrack``, ``otb``, ``vot`` or ``uav123``.
+    path : Path
+        The sequence folder, or the video file.
+    gt_path : Path
+        The ground-truth file.
+    gt : GroundTruth
+        One row per frame (rows beyond the file's end are NaN, i.e. unscored).
+    roi : Ellipse
+        Initial ROI, applied on frame ``start``.
+    start : int
+        Index of the frame the tracker is initialised on (the first with ground truth; 0 with a ``.roi``).
+    n_frames : int
+        Number of frames (for videos: the container's count, which may be approximate; 0 if unknown).
+    fps : float
+        Frames per second (:data:`IMAGE_FPS` for image sequences).
+    frame_files : tuple of Path or None
+        Frame images in order, for image sequences.
+    """
+
+    name: str
+    kind: str
+    path: Path
+    gt_path: Path
+    gt: GroundTruth
+    roi: Ellipse
+    start: int
+    n_frames: int
+    fps: float
+    frame_files: tuple | None = None
+
+    def frames(self) -> Iterator[tuple[int, float, np.ndarray]]:
+        """Yield ``(index, time_s, frame)`` for every frame, decoding one at a time (BGR uint8).
+
+        Raises
+        ------
+        VideoError
+            If the video cannot be opened or a frame image cannot be read.
+        """
+        if self.frame_files is not None:
+            yield from _image_frames(self.frame_files, self.fps)
+        else:
+            yield from _video_frames(self.path)
+
+    def describe(self) -> dict:
+        """Plain-data summary for reports (JSON)."""
+        return {"name": self.name, "kind": self.kind, "path": str(self.path), "ground_truth": str(self.gt_path),
+                "frames": self.n_frames, "scored_frames": int(self.gt.valid[: self.n_frames or None].sum()),
+                "rotated_ground_truth": bool(self.gt.rotated), "start_frame": self.start,
+                "roi": self.roi.to_spec()}
+
+
+def _image_frames(files, fps: float):
+    import cv2
+
+    for i, path in enumerate(files):
+        frame = cv2.imread(str(path), cv2.IMREAD_COLOR)
+        if frame is None:
+            raise VideoError(f"cannot read frame image '{path}'; expected a JPEG/PNG image")
+        yield i, i / fps, frame
+
+
+def _video_frames(path: Path):
+    try:  # the project's reader when present (timestamps, error messages); a plain loop otherwise
+        from .video import VideoReader
+    except ImportError:
+        VideoReader = None
+    if VideoReader is not None:
+        with VideoReader(path) as reader:
+            yield from reader
+        return
+    import cv2
+
+    cap = cv2.VideoCapture(str(path))
+    if not cap.isOpened():
+        raise VideoError(f"cannot open video '{path}'; expected a readable video file")
+    fps = cap.get(cv2.CAP_PROP_FPS) or IMAGE_FPS
+    try:
+        index = 0
+        while True:
+            ok, frame = cap.read()
+            if not ok:
+                break
+            yield index, index / fps, frame
+            index += 1
+    finally:
+        cap.release()
+
+
+def _natural_key(path: Path):
+    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", path.name)]
+
+
+def _images_in(folder: Path) -> list[Path]:
+    if not folder.is_dir():
+        return []
+    return sorted((p for p in folder.iterdir() if p.suffix.lower() in IMAGE_EXTENSIONS and p.is_file()),
+                  key=_natural_key)
+
+
+def _image_sequence(name: str, kind: str, folder: Path, gt_path: Path, files: list[Path]) -> Sequence:
+    gt = read_box_text(gt_path, source=kind).truncated(len(files))
+    start = gt.first_valid
+    return Sequence(name, kind, folder, gt_path, gt, gt.initial_roi(), start, len(files), IMAGE_FPS, tuple(files))
+
+
+def _video_info(path: Path) -> tuple[int, float]:
+    import cv2
+
+    cap = cv2.VideoCapture(str(path))
+    try:
+        if not cap.isOpened():
+            raise VideoError(f"cannot open video '{path}'; expected a readable video file")
+        n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
+        fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+    finally:
+        cap.release()
+    return max(n, 0), (fps if fps > 0 and math.isfinite(fps) else IMAGE_FPS)
+
+
+def video_sequence(video: Path, gt_path: Path | None = None) -> Sequence:
+    """The lptrack sample ``video`` with its ``<stem>.gt.csv`` and optional ``<stem>.roi`` sidecars.
+
+    Raises
+    ------
+    GroundTruthError, RoiError, VideoError
+        Missing or unreadable sidecar, malformed ROI, video that does not open.
+    """
+    video = Path(video)
+    stem = video.name[: -len(video.suffix)]
+    gt_path = Path(gt_path) if gt_path else video.with_name(stem + ".gt.csv")
+    gt = read_gt_csv(gt_path)
+    n, fps = _video_info(video)
+    roi_path = video.with_name(stem + ".roi")
+    if roi_path.is_file():
+        text = roi_path.read_text(encoding="utf-8").strip().splitlines()
+        try:
+            roi = parse_roi(text[0] if text else "")
+        except RoiError as exc:
+            raise RoiError(f"{roi_path}: {exc}") from None
+        start = 0
+    else:
+        roi, start = gt.initial_roi(), gt.first_valid
+    if n and len(gt) < n:
+        gt = gt.truncated(n)
+    return Sequence(stem, "lptrack", video, gt_path, gt, roi, start, n, fps, None)
+
+
+def sequences_in(folder: Path) -> list[Sequence]:
+    """The sequences stored directly in ``folder`` (no recursion); empty if it is not a sequence folder."""
+    folder = Path(folder)
+    found: list[Sequence] = []
+    # lptrack samples: videos with a .gt.csv sidecar.
+    for video in sorted(folder.iterdir(), key=_natural_key):
+        if video.suffix.lower() in VIDEO_EXTENSIONS and video.is_file():
+            stem = video.name[: -len(video.suffix)]
+            if (folder / (stem + ".gt.csv")).is_file():
+                found.append(video_sequence(video))
+    if found:
+        return found
+    # OTB: img/ + groundtruth_rect.txt (or one file per target).
+    img = _images_in(folder / "img")
+    otb = sorted(folder.glob("groundtruth_rect*.txt"), key=_natural_key)
+    if img and otb:
+        for gt_path in otb:
+            suffix = gt_path.name[len("groundtruth_rect"):-len(".txt")].strip(".")
+            name = folder.name + (f"-{suffix}" if suffix else "")
+            found.append(_image_sequence(name, "otb", folder, gt_path, img))
+        return found
+    # VOT: groundtruth.txt + frames in the folder, imgs/ or color/.
+    vot = folder / "groundtruth.txt"
+    if vot.is_file():
+        for sub in (folder, folder / "imgs", folder / "color"):
+            files = _images_in(sub)
+            if files:
+                return [_image_sequence(folder.name, "vot", folder, vot, files)]
+    # UAV123: img/ + <name>.txt.
+    uav = folder / f"{folder.name}.txt"
+    if img and uav.is_file():
+        return [_image_sequence(folder.name, "uav123", folder, uav, img)]
+    return []
+
+
+def discover(path) -> list[Sequence]:
+    """Every sequence in ``path``: a sequence folder, a folder of sequence folders, or a sample video.
+
+    Sub-folders are searched (up to three levels) only where a folder holds no sequence itself. Results are
+    in natural order of their paths.
+
+    Raises
+    ------
+    UsageError
+        If ``path`` does not exist.
+    GroundTruthError, RoiError, VideoError
+        If a sequence's ground truth, ROI sidecar or video cannot be read.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise UsageError(f"dataset '{path}' does not exist; give a folder of sequences or a sample video")
+    if path.is_file():
+        if path.suffix.lower() in VIDEO_EXTENSIONS:
+            return [video_sequence(path)]
+        raise UsageError(f"dataset '{path}' is a file; give a folder of sequences or a video with a .gt.csv")
+    return _discover(path, _MAX_DEPTH)
+
+
+def _discover(folder: Path, depth: int) -> list[Sequence]:
+    found = sequences_in(folder)
+    if found or depth == 0:
+        return found
+    for sub in sorted((p for p in folder.iterdir() if p.is_dir() and not p.name.startswith(".")),
+                      key=_natural_key):
+        found.extend(_discover(sub, depth - 1))
+    return found
+
+
+def load_ground_truth(path) -> GroundTruth:
+    """Ground truth from a file in any supported format, or from a sequence folder / sample video.
+
+    Raises
+    ------
+    UsageError
+        If ``path`` does not exist, or is a folder holding no sequence or several.
+    GroundTruthError
+        If the file cannot be read.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise UsageError(f"ground truth '{path}' does not exist")
+    if path.is_file() and path.suffix.lower() not in VIDEO_EXTENSIONS:
+        from .evaluate import read_ground_truth
+
+        return read_ground_truth(path)
+    seqs = discover(path)
+    if len(seqs) != 1:
+        raise UsageError(f"'{path}' holds {len(seqs)} sequences; give one sequence folder or ground-truth file "
+                         "(.gt.csv, groundtruth_rect.txt, groundtruth.txt, <name>.txt)")
+    return seqs[0].gt
+
+
+__all__ = ["Sequence", "discover", "sequences_in", "video_sequence", "load_ground_truth", "GroundTruthError",
+           "IMAGE_FPS"]

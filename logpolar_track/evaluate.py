@@ -1,0 +1,754 @@
+"""Ground truth readers and accuracy metrics, shared by ``lptrack bench`` and ``lptrack eval``.
+
+Conventions
+-----------
+* Pixel coordinates, origin at the top-left corner, x right, y down, 0-based (OTB and UAV123 files are 1-based
+  and are shifted by -1 when read).
+* A *box* is axis-aligned ``(x, y, w, h)``: top-left corner and size in pixels.
+* A *rotated box* is ``(cx, cy, w, h, angle_deg)``: centre, side lengths in pixels, and the direction of side
+  ``w`` in degrees **counter-clockwise as seen on screen** (lptrack's ROI convention: direction ``t`` points
+  along ``(cos t, -sin t)``). ``h`` lies across ``w``.
+* Ground truth is held as rotated boxes for every format; axis-aligned formats have angle 0 and
+  ``rotated=False``. Rows of NaN are frames that are not scored.
+
+Metrics (all computed only on *scored* frames: frames with finite ground truth and a prediction)
+----------------------------------------------------------------------------------------------
+overlap (IoU)
+    Intersection over union of the tracker's box and the ground-truth box. When the ground truth is
+    axis-aligned the tracker's box is the axis-aligned bounding box of its ellipse; when the ground truth is
+    rotated (VOT polygons, lptrack ``.gt.csv`` ellipses) it is the ellipse's own rectangle
+    ``(cx, cy, 2a, 2b, angle)``, and the ground truth of a ``.gt.csv`` is likewise its ellipse's rectangle.
+success rate
+    Share of scored frames whose centre error is **below 25 % of the object's ground-truth radius**, the radius
+    being ``sqrt(w*h)/2`` of the ground-truth box (``sqrt(a*b)`` for an ellipse: the radius of the circle of
+    equal area). Scale-free, so it means the same on a 20-pixel and a 200-pixel object.
+success curve and AUC
+    OTB's success plot (Wu, Lim, Yang, TPAMI 2015): for 21 IoU thresholds 0, 0.05, ..., 1 the share of scored
+    frames with IoU **strictly greater** than the threshold; AUC is the mean of the 21 values.
+precision
+    OTB's precision plot: share of scored frames with centre error **at most** t pixels, t = 0..50; the
+    figure quoted is t = 20 px.
+scale error
+    ``|s_pred / s_gt - 1|`` in percent, both scales taken relative to the first scored frame. ``s_gt`` is the
+    ``scale`` column of a ``.gt.csv``, otherwise the box size ratio ``sqrt(w*h) / sqrt(w0*h0)``; ``s_pred`` is
+    the tracker's reported scale.
+rotation error
+    Only where the ground truth has an angle and the tracker measures rotation. Cumulative (unwrapped)
+    rotation of both, relative to the first scored frame, compared directly for ``.gt.csv`` (a turn missed
+    costs 360 degrees), and **modulo 180 degrees** (error in [0, 90]) for rectangle ground truth such as VOT's,
+    whose rectangles look the same after half a turn so their cumulative rotation is only known up to
+    multiples of 180 degrees.
+
+All metric functions are pure functions of numpy arrays.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import LptrackError
+from .geometry import Ellipse, ellipse_in_rotated_rect
+
+#: IoU thresholds of the OTB success plot.
+IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
+#: Centre-error thresholds (pixels) of the OTB precision plot.
+PRECISION_THRESHOLDS = np.arange(0.0, 51.0)
+#: Centre error, as a fraction of the object's radius, under which a frame counts as a success.
+SUCCESS_RADIUS_FRACTION = 0.25
+#: Centre error (pixels) at which precision is quoted.
+PRECISION_PX = 20.0
+
+GT_CSV_COLUMNS = ("frame", "cx", "cy", "a", "b", "angle_deg", "scale", "rotation_deg")
+
+
+class GroundTruthError(LptrackError):
+    """A ground-truth or prediction file cannot be read (missing, wrong columns, not numbers)."""
+
+    exit_code = 1
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Geometry of boxes
+# ----------------------------------------------------------------------------------------------------------
+
+def box_iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Intersection over union of axis-aligned boxes.
+
+    Parameters
+    ----------
+    a, b : array_like, shape (n, 4) or (4,)
+        Boxes ``(x, y, w, h)`` in pixels, (x, y) the top-left corner; continuous coordinates (a box covers
+        ``[x, x+w] x [y, y+h]``).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        IoU in [0, 1]; NaN where either box has a NaN; 0 where the union is empty.
+    """
+    a = np.atleast_2d(np.asarray(a, float))
+    b = np.atleast_2d(np.asarray(b, float))
+    iw = np.minimum(a[:, 0] + a[:, 2], b[:, 0] + b[:, 2]) - np.maximum(a[:, 0], b[:, 0])
+    ih = np.minimum(a[:, 1] + a[:, 3], b[:, 1] + b[:, 3]) - np.maximum(a[:, 1], b[:, 1])
+    inter = np.clip(iw, 0, None) * np.clip(ih, 0, None)
+    union = a[:, 2] * a[:, 3] + b[:, 2] * b[:, 3] - inter
+    with np.errstate(invalid="ignore", divide="ignore"):
+        iou = np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)
+    iou[np.isnan(a).any(axis=1) | np.isnan(b).any(axis=1)] = np.nan
+    return iou
+
+
+def rotated_box_corners(box) -> np.ndarray:
+    """The four corners ``(4, 2)`` (x, y pixels) of a rotated box ``(cx, cy, w, h, angle_deg)``.
+
+    Side ``w`` runs along ``angle_deg`` (counter-clockwise on screen), i.e. along ``(cos t, -sin t)``.
+    """
+    cx, cy, w, h, angle = (float(v) for v in box)
+    t = math.radians(angle)
+    u = np.array([math.cos(t), -math.sin(t)]) * (w / 2.0)
+    v = np.array([-math.sin(t), -math.cos(t)]) * (h / 2.0)  # u turned by +90 degrees on screen
+    c = np.array([cx, cy])
+    return np.array([c + u + v, c - u + v, c - u - v, c + u - v])
+
+
+def polygon_area(points: np.ndarray) -> float:
+    """Signed shoelace area of a polygon ``(n, 2)``; positive when counter-clockwise in (x, y) axes."""
+    if len(points) < 3:
+        return 0.0
+    x, y = points[:, 0], points[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def clip_convex(subject: np.ndarray, clip: np.ndarray) -> np.ndarray:
+    """Intersection of two convex polygons (Sutherland-Hodgman), both ``(n, 2)`` with positive orientation.
+
+    Returns the intersection polygon ``(m, 2)`` (``m`` may be 0).
+    """
+    out = subject
+    n = len(clip)
+    for i in range(n):
+        if len(out) == 0:
+            break
+        p, q = clip[i], clip[(i + 1) % n]
+        edge = q - p
+        # Cross product > = 0: on the inner (left) side of the edge, for a positively oriented clip polygon.
+        side = edge[0] * (out[:, 1] - p[1]) - edge[1] * (out[:, 0] - p[0])
+        inside = side >= -1e-12
+        result = []
+        for j in range(len(out)):
+            cur, nxt = out[j], out[(j + 1) % len(out)]
+            s_cur, s_nxt = side[j], side[(j + 1) % len(out)]
+            if inside[j]:
+                result.append(cur)
+            if (s_cur >= -1e-12) != (s_nxt >= -1e-12):
+                f = s_cur / (s_cur - s_nxt)
+                result.append(cur + f * (nxt - cur))
+        out = np.array(result) if result else np.zeros((0, 2))
+    return out
+
+
+def rotated_box_iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Intersection over union of rotated boxes.
+
+    Parameters
+    ----------
+    a, b : array_like, shape (n, 5) or (5,)
+        Rotated boxes ``(cx, cy, w, h, angle_deg)``: centre and sides in pixels, angle of side ``w`` in degrees
+        counter-clockwise on screen.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        IoU in [0, 1], exact up to float rounding (convex polygon clipping); NaN where either box has a NaN.
+    """
+    a = np.atleast_2d(np.asarray(a, float))
+    b = np.atleast_2d(np.asarray(b, float))
+    out = np.full(len(a), np.nan)
+    for i in range(len(a)):
+        if np.isnan(a[i]).any() or np.isnan(b[i]).any():
+            continue
+        pa, pb = _positive(rotated_box_corners(a[i])), _positive(rotated_box_corners(b[i]))
+        area_a, area_b = polygon_area(pa), polygon_area(pb)
+        inter = max(polygon_area(clip_convex(pa, pb)), 0.0)
+        union = area_a + area_b - inter
+        out[i] = min(inter / union, 1.0) if union > 0 else 0.0
+    return out
+
+
+def _positive(poly: np.ndarray) -> np.ndarray:
+    return poly if polygon_area(poly) >= 0 else poly[::-1]
+
+
+def boxes_to_rotated(boxes: np.ndarray) -> np.ndarray:
+    """Axis-aligned boxes ``(n, 4)`` ``(x, y, w, h)`` as rotated boxes ``(n, 5)`` with angle 0."""
+    boxes = np.atleast_2d(np.asarray(boxes, float))
+    return np.column_stack([boxes[:, 0] + boxes[:, 2] / 2, boxes[:, 1] + boxes[:, 3] / 2,
+                            boxes[:, 2], boxes[:, 3], np.zeros(len(boxes))])
+
+
+def rotated_to_aabb(rboxes: np.ndarray) -> np.ndarray:
+    """Axis-aligned bounding boxes ``(n, 4)`` of rotated boxes ``(n, 5)``."""
+    r = np.atleast_2d(np.asarray(rboxes, float))
+    t = np.radians(r[:, 4])
+    c, s = np.abs(np.cos(t)), np.abs(np.sin(t))
+    hw = (r[:, 2] * c + r[:, 3] * s) / 2
+    hh = (r[:, 2] * s + r[:, 3] * c) / 2
+    return np.column_stack([r[:, 0] - hw, r[:, 1] - hh, 2 * hw, 2 * hh])
+
+
+def rect_from_polygon(points) -> tuple[float, float, float, float, float]:
+    """The rotated rectangle fitted to a quadrilateral (``cv2.minAreaRect``) in lptrack's angle convention.
+
+    Parameters
+    ----------
+    points : array_like, shape (4, 2) or (8,)
+        Corners (x, y) in pixels, in any order (VOT's corner order varies between frames).
+
+    Returns
+    -------
+    (cx, cy, w, h, angle_deg)
+        Side ``w`` along ``angle_deg`` (counter-clockwise on screen). Which side is called ``w`` is arbitrary
+        here (see :func:`unwrap_rects` for a consistent choice over a sequence).
+    """
+    import cv2
+
+    pts = np.asarray(points, np.float32).reshape(-1, 2)
+    rect = cv2.minAreaRect(pts)
+    # Read sides and angle off the rectangle's corners rather than OpenCV's angle field, whose range and sign
+    # convention changed between OpenCV versions.
+    corners = cv2.boxPoints(rect).astype(float)
+    side_w, side_h = corners[1] - corners[0], corners[2] - corners[1]
+    angle = math.degrees(math.atan2(-side_w[1], side_w[0]))
+    (cx, cy) = rect[0]
+    return (float(cx), float(cy), float(np.hypot(*side_w)), float(np.hypot(*side_h)), angle)
+
+
+def unwrap_rects(rects: np.ndarray) -> np.ndarray:
+    """Choose side order and angle of each rotated rectangle so the angle changes continuously.
+
+    A rectangle ``(cx, cy, w, h, t)`` is the same as ``(cx, cy, w, h, t + 180k)`` and ``(cx, cy, h, w, t + 90)``.
+    The first finite rectangle is written with ``w >= h`` and ``t`` in (-90, 90]; each later one takes the
+    variant ``t + 90k`` (sides swapped for odd ``k``) nearest to the previous finite angle, so the angle
+    sequence is unwrapped (it can grow past 180 over several turns). This assumes less than 45 degrees of
+    rotation between consecutive annotated frames.
+
+    Parameters
+    ----------
+    rects : ndarray, shape (n, 5)
+        Rotated rectangles; NaN rows are kept as NaN.
+
+    Returns
+    -------
+    ndarray, shape (n, 5)
+    """
+    out = np.array(rects, float, copy=True)
+    prev = None
+    for i, (cx, cy, w, h, t) in enumerate(out):
+        if not np.isfinite(out[i]).all():
+            continue
+        if prev is None:
+            if h > w:
+                w, h, t = h, w, t + 90.0
+            t = t - 180.0 * math.ceil((t - 90.0) / 180.0)  # into (-90, 90]
+        else:
+            k = round((prev - t) / 90.0)
+            t = t + 90.0 * k
+            if k % 2:
+                w, h = h, w
+        out[i] = (cx, cy, w, h, t)
+        prev = t
+    return out
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Ground truth and predictions
+# ----------------------------------------------------------------------------------------------------------
+
+@dataclass
+class GroundTruth:
+    """Ground truth of one sequence, one row per frame (NaN rows: not scored).
+
+    Attributes
+    ----------
+    boxes : ndarray, shape (n, 5)
+        Rotated boxes ``(cx, cy, w, h, angle_deg)`` in pixels / degrees CCW; row ``k`` is frame ``k``.
+    rotated : bool
+        True when the boxes carry a measured orientation (VOT polygons, ``.gt.csv`` ellipses); then overlap is
+        computed between rotated boxes, otherwise between axis-aligned boxes.
+    scale : ndarray, shape (n,)
+        Object scale relative to the first finite row (``.gt.csv`` column or box size ratio).
+    rotation_deg : ndarray, shape (n,) or None
+        Cumulative counter-clockwise rotation since the first finite row, when the ground truth has an angle.
+    rotation_period : float or None
+        360 when rotation is known in full (``.gt.csv``), 180 for rectangles (VOT), None without an angle.
+    ellipses : ndarray, shape (n, 5) or None
+        ``(cx, cy, a, b, angle_deg)`` for ``.gt.csv`` ground truth.
+    source : str
+        Format name: ``lptrack``, ``otb``, ``vot``, ``uav123`` or ``boxes``.
+    """
+
+    boxes: np.ndarray
+    rotated: bool
+    scale: np.ndarray
+    rotation_deg: np.ndarray | None = None
+    rotation_period: float | None = None
+    ellipses: np.ndarray | None = None
+    source: str = "boxes"
+
+    def __len__(self) -> int:
+        return len(self.boxes)
+
+    @property
+    def valid(self) -> np.ndarray:
+        """Boolean mask of scored frames (finite box with positive sides)."""
+        b = self.boxes
+        return np.isfinite(b).all(axis=1) & (np.nan_to_num(b[:, 2]) > 0) & (np.nan_to_num(b[:, 3]) > 0)
+
+    @property
+    def first_valid(self) -> int:
+        """Index of the first scored frame; raises :class:`GroundTruthError` if there is none."""
+        idx = np.flatnonzero(self.valid)
+        if idx.size == 0:
+            raise GroundTruthError("the ground truth has no frame with a valid box")
+        return int(idx[0])
+
+    @property
+    def radius(self) -> np.ndarray:
+        """The object's radius per frame in pixels: ``sqrt(w*h)/2`` (for an ellipse ``sqrt(a*b)``)."""
+        return np.sqrt(self.boxes[:, 2] * self.boxes[:, 3]) / 2.0
+
+    def truncated(self, n: int) -> "GroundTruth":
+        """The first ``n`` rows, padded with NaN rows (unscored) when the sequence is longer than the file."""
+        def fit(arr):
+            if arr is None:
+                return None
+            if len(arr) >= n:
+                return arr[:n].copy()
+            pad = np.full((n - len(arr),) + arr.shape[1:], np.nan)
+            return np.concatenate([arr, pad])
+        return GroundTruth(fit(self.boxes), self.rotated, fit(self.scale), fit(self.rotation_deg),
+                           self.rotation_period, fit(self.ellipses), self.source)
+
+    def initial_roi(self) -> Ellipse:
+        """The ellipse inscribed in the first valid box (the ``.gt.csv`` ellipse itself)."""
+        i = self.first_valid
+        if self.ellipses is not None:
+            return Ellipse(*(float(v) for v in self.ellipses[i]))
+        cx, cy, w, h, angle = (float(v) for v in self.boxes[i])
+        return ellipse_in_rotated_rect(cx, cy, w, h, angle)
+
+
+def _relative(values: np.ndarray, valid: np.ndarray, *, ratio: bool) -> np.ndarray:
+    idx = np.flatnonzero(valid & np.isfinite(values))
+    if idx.size == 0:
+        return np.full(len(values), np.nan)
+    ref = values[idx[0]]
+    return values / ref if ratio else values - ref
+
+
+def ground_truth_from_boxes(boxes: np.ndarray, *, source: str = "boxes") -> GroundTruth:
+    """Ground truth from axis-aligned boxes ``(n, 4)`` ``(x, y, w, h)`` (0-based pixels; NaN rows unscored)."""
+    boxes = np.asarray(boxes, float).reshape(-1, 4)
+    rboxes = boxes_to_rotated(boxes)
+    gt = GroundTruth(rboxes, False, np.ones(len(rboxes)), source=source)
+    size = np.sqrt(rboxes[:, 2] * rboxes[:, 3])
+    gt.scale = _relative(size, gt.valid, ratio=True)
+    return gt
+
+
+def ground_truth_from_rects(rects: np.ndarray, *, source: str = "vot") -> GroundTruth:
+    """Ground truth from rotated rectangles ``(n, 5)``, unwrapped; rotation known modulo 180 degrees."""
+    rects = unwrap_rects(np.asarray(rects, float).reshape(-1, 5))
+    gt = GroundTruth(rects, True, np.ones(len(rects)), rotation_period=180.0, source=source)
+    valid = gt.valid
+    gt.scale = _relative(np.sqrt(rects[:, 2] * rects[:, 3]), valid, ratio=True)
+    gt.rotation_deg = _relative(rects[:, 4].copy(), valid, ratio=False)
+    return gt
+
+
+def ground_truth_from_ellipses(ellipses: np.ndarray, scale: np.ndarray | None = None,
+                               rotation_deg: np.ndarray | None = None) -> GroundTruth:
+    """Ground truth from ellipses ``(n, 5)`` ``(cx, cy, a, b, angle_deg)`` as in a ``.gt.csv``.
+
+    ``scale`` and ``rotation_deg`` default to (and are filled where NaN from) the semi-axes' size ratio and
+    the angle change since the first valid row.
+    """
+    e = np.asarray(ellipses, float).reshape(-1, 5)
+    boxes = np.column_stack([e[:, 0], e[:, 1], 2 * e[:, 2], 2 * e[:, 3], e[:, 4]])
+    gt = GroundTruth(boxes, True, np.ones(len(e)), rotation_period=360.0, ellipses=e, source="lptrack")
+    valid = gt.valid
+    size_scale = _relative(np.sqrt(e[:, 2] * e[:, 3]), valid, ratio=True)
+    angle_rot = _relative(e[:, 4].copy(), valid, ratio=False)
+    gt.scale = size_scale if scale is None else np.where(np.isfinite(scale), scale, size_scale)
+    gt.rotation_deg = angle_rot if rotation_deg is None else np.where(np.isfinite(rotation_deg),
+                                                                      rotation_deg, angle_rot)
+    return gt
+
+
+_SPLIT = re.compile(r"[,\s;]+")
+
+
+def parse_number_lines(text: str, *, source: str = "ground truth") -> list[list[float]]:
+    """Numbers per line of a benchmark ground-truth text (separators: comma, tab, space, semicolon).
+
+    Trailing empty lines are dropped; an empty line inside the file is kept as an empty list (unscored).
+    ``NaN`` is read as not-a-number.
+    """
+    lines = text.splitlines()
+    while lines and not lines[-1].strip():
+        lines.pop()
+    rows = []
+    for number, line in enumerate(lines, 1):
+        fields = [f for f in _SPLIT.split(line.strip()) if f]
+        try:
+            rows.append([float(f) for f in fields])
+        except ValueError:
+            raise GroundTruthError(f"{source}, line {number}: '{line.strip()[:60]}' is not a list of numbers; "
+                                   "expected x,y,w,h or x1,y1,...,x4,y4 (commas, tabs or spaces)") from None
+    return rows
+
+
+def read_box_text(path, *, one_based: bool | None = None, source: str | None = None) -> GroundTruth:
+    """Read an OTB/UAV123 ``x,y,w,h`` file or a VOT file (``x,y,w,h`` or 8-number polygons).
+
+    Parameters
+    ----------
+    path : path-like
+        Text file, line ``k`` (from 1) belonging to frame ``k - 1``.
+    one_based : bool, optional
+        Whether coordinates are 1-based (Matlab toolkits: OTB, UAV123) and must be shifted by -1 pixel.
+        Default: False for a file named ``groundtruth.txt`` (VOT), True otherwise.
+    source : str, optional
+        Format name stored in the result; default ``vot`` for ``groundtruth.txt``, ``otb`` for
+        ``groundtruth_rect*.txt``, else ``uav123``.
+
+    Returns
+    -------
+    GroundTruth
+        Rotated (VOT polygons fitted with ``cv2.minAreaRect``, see :func:`unwrap_rects`) if any line has 8
+        numbers, else axis-aligned. Lines of NaN, empty lines, and boxes with ``w <= 0`` or ``h <= 0`` are
+        unscored.
+
+    Raises
+    ------
+    GroundTruthError
+        If the file cannot be read or a line is not 4 or 8 numbers.
+    """
+    path = Path(path)
+    name = path.name.lower()
+    if one_based is None:
+        one_based = name != "groundtruth.txt"
+    if source is None:
+        source = "vot" if name == "groundtruth.txt" else "otb" if name.startswith("groundtruth_rect") else "uav123"
+    try:
+        text = path.read_text(encoding="utf-8-sig", errors="replace")
+    except OSError as exc:
+        raise GroundTruthError(f"cannot read ground truth '{path}': {exc.strerror or exc}") from None
+    rows = parse_number_lines(text, source=f"'{path}'")
+    if not rows:
+        raise GroundTruthError(f"ground truth '{path}' is empty; expected one x,y,w,h line per frame")
+    shift = 1.0 if one_based else 0.0
+    polygons = any(len(r) == 8 for r in rows)
+    out = np.full((len(rows), 5 if polygons else 4), np.nan)
+    for k, row in enumerate(rows):
+        if len(row) == 0 or all(math.isnan(v) for v in row):
+            continue
+        if len(row) not in (4, 8):
+            raise GroundTruthError(f"'{path}', line {k + 1}: {len(row)} numbers; expected 4 (x,y,w,h) or 8 "
+                                   "(x1,y1,...,x4,y4)")
+        if any(math.isnan(v) for v in row):
+            continue
+        if len(row) == 4:
+            x, y, w, h = row
+            if w <= 0 or h <= 0:
+                continue
+            out[k] = (x - shift + w / 2, y - shift + h / 2, w, h, 0.0) if polygons else (x - shift, y - shift, w, h)
+        else:
+            cx, cy, w, h, angle = rect_from_polygon(np.array(row) - shift)
+            if w > 0 and h > 0:
+                out[k] = (cx, cy, w, h, angle)
+    if polygons:
+        return ground_truth_from_rects(out, source=source)
+    return ground_truth_from_boxes(out, source=source)
+
+
+def _float(text) -> float:
+    text = (text or "").strip()
+    if text.lower() in ("", "n/a", "na", "none", "nan"):
+        return math.nan
+    return float(text)
+
+
+def _read_csv_columns(path, required: tuple[str, ...], what: str) -> tuple[list[dict], list[str]]:
+    path = Path(path)
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as fh:
+            reader = csv.DictReader(fh)
+            header = [h.strip() for h in (reader.fieldnames or [])]
+            reader.fieldnames = header
+            rows = list(reader)
+    except OSError as exc:
+        raise GroundTruthError(f"cannot read {what} '{path}': {exc.strerror or exc}") from None
+    missing = [c for c in required if c not in header]
+    if missing:
+        raise GroundTruthError(f"{what} '{path}' lacks column(s) {', '.join(missing)}; expected a header "
+                               f"with {','.join(required)}")
+    return rows, header
+
+
+def read_gt_csv(path) -> GroundTruth:
+    """Read an lptrack ground-truth sidecar ``<name>.gt.csv``.
+
+    Columns ``frame,cx,cy,a,b,angle_deg,scale,rotation_deg`` (``scale`` and ``rotation_deg`` optional), the
+    lptrack ROI conventions (pixels, semi-axes, degrees CCW, rotation cumulative). Row ``frame`` is placed at
+    frame index ``frame``; frames without a row, and rows with empty/NaN fields, are unscored.
+
+    Raises
+    ------
+    GroundTruthError
+        Unreadable file, missing columns, or fields that are not numbers.
+    """
+    rows, header = _read_csv_columns(path, GT_CSV_COLUMNS[:6], "ground truth")
+    try:
+        frames = [int(float(r["frame"])) for r in rows]
+        values = np.array([[_float(r.get(c)) for c in GT_CSV_COLUMNS[1:]] for r in rows], float).reshape(-1, 7)
+    except (TypeError, ValueError) as exc:
+        raise GroundTruthError(f"ground truth '{path}' has a field that is not a number ({exc})") from None
+    if not frames:
+        raise GroundTruthError(f"ground truth '{path}' has no rows")
+    if min(frames) < 0:
+        raise GroundTruthError(f"ground truth '{path}' has a negative frame number")
+    n = max(frames) + 1
+    table = np.full((n, 7), np.nan)
+    table[frames] = values
+    scale = table[:, 5] if "scale" in header else None
+    rotation = table[:, 6] if "rotation_deg" in header else None
+    return ground_truth_from_ellipses(table[:, :5], scale, rotation)
+
+
+def read_ground_truth(path) -> GroundTruth:
+    """Read ground truth in any supported format, chosen by the file name.
+
+    ``*.csv``: lptrack ``.gt.csv``; ``groundtruth.txt``: VOT (0-based, 4 or 8 numbers); any other ``.txt``:
+    OTB / UAV123 ``x,y,w,h`` (1-based). See :func:`read_gt_csv` and :func:`read_box_text`.
+    """
+    path = Path(path)
+    if path.suffix.lower() == ".csv":
+        return read_gt_csv(path)
+    return read_box_text(path)
+
+
+@dataclass
+class Track:
+    """A tracker's output over a sequence, one entry per frame (arrays of equal length).
+
+    Attributes
+    ----------
+    frames : ndarray of int
+        Frame indices.
+    ellipses : ndarray, shape (n, 5)
+        ``(cx, cy, a, b, angle_deg)`` pixels / degrees CCW.
+    scale : ndarray
+        Scale relative to the first frame.
+    rotation_deg : ndarray
+        Cumulative CCW rotation since the first frame; NaN where the tracker does not measure rotation.
+    score : ndarray
+        Confidence in [0, 1].
+    status : list of str
+        ``init``, ``tracked`` or ``lost`` per frame.
+    """
+
+    frames: np.ndarray
+    ellipses: np.ndarray
+    scale: np.ndarray
+    rotation_deg: np.ndarray
+    score: np.ndarray
+    status: list = field(default_factory=list)
+
+    def boxes(self, *, rotated: bool) -> np.ndarray:
+        """Rotated boxes ``(n, 5)`` of the ellipses: their own rectangle, or (``rotated=False``) the
+        axis-aligned bounding box of each ellipse expressed with angle 0."""
+        e = self.ellipses
+        own = np.column_stack([e[:, 0], e[:, 1], 2 * e[:, 2], 2 * e[:, 3], e[:, 4]])
+        if rotated:
+            return own
+        # The bounding box of an ellipse is the bounding box of its own rectangle shrunk: half extents
+        # sqrt((a cos t)^2 + (b sin t)^2), not a |cos t| + b |sin t|.
+        t = np.radians(e[:, 4])
+        hw = np.hypot(e[:, 2] * np.cos(t), e[:, 3] * np.sin(t))
+        hh = np.hypot(e[:, 2] * np.sin(t), e[:, 3] * np.cos(t))
+        return np.column_stack([e[:, 0], e[:, 1], 2 * hw, 2 * hh, np.zeros(len(e))])
+
+
+RUN_CSV_REQUIRED = ("frame", "cx", "cy", "a", "b", "angle_deg")
+
+
+def read_track_csv(path) -> Track:
+    """Read a run CSV (``frame,time_s,cx,cy,a,b,angle_deg,scale,rotation_deg,score,status``) as predictions.
+
+    Empty, ``n/a`` or ``nan`` fields become NaN (e.g. ``rotation_deg`` of trackers that do not measure it);
+    missing ``scale``/``score`` default to 1, a missing ``status`` to ``tracked``.
+
+    Raises
+    ------
+    GroundTruthError
+        Unreadable file, missing columns, or fields that are not numbers.
+    """
+    rows, header = _read_csv_columns(path, RUN_CSV_REQUIRED, "run CSV")
+    if not rows:
+        raise GroundTruthError(f"run CSV '{path}' has no rows")
+    try:
+        frames = np.array([int(float(r["frame"])) for r in rows])
+        ell = np.array([[_float(r[c]) for c in ("cx", "cy", "a", "b", "angle_deg")] for r in rows], float)
+        scale = np.array([_float(r.get("scale", "1")) for r in rows], float)
+        rot = np.array([_float(r.get("rotation_deg")) for r in rows], float)
+        score = np.array([_float(r.get("score", "1")) for r in rows], float)
+    except (TypeError, ValueError) as exc:
+        raise GroundTruthError(f"run CSV '{path}' has a field that is not a number ({exc})") from None
+    status = [(r.get("status") or "tracked").strip() for r in rows]
+    return Track(frames, ell, scale, rot, score, status)
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Metrics
+# ----------------------------------------------------------------------------------------------------------
+
+def centre_error(pred_xy: np.ndarray, gt_xy: np.ndarray) -> np.ndarray:
+    """Euclidean distance in pixels between predicted and ground-truth centres, arrays ``(n, 2)``."""
+    d = np.asarray(pred_xy, float) - np.asarray(gt_xy, float)
+    return np.hypot(d[..., 0], d[..., 1])
+
+
+def success_rate(errors_px: np.ndarray, radius_px: np.ndarray, fraction: float = SUCCESS_RADIUS_FRACTION) -> float:
+    """Share of frames whose centre error is below ``fraction`` of the object's radius (both pixels).
+
+    NaN errors count as failures; returns NaN for no frames.
+    """
+    e, r = np.asarray(errors_px, float), np.asarray(radius_px, float)
+    if e.size == 0:
+        return math.nan
+    return float(np.mean(np.nan_to_num(e, nan=np.inf) < fraction * r))
+
+
+def success_curve(ious: np.ndarray, thresholds: np.ndarray = IOU_THRESHOLDS) -> np.ndarray:
+    """OTB success curve: for each threshold, the share of frames with IoU strictly above it (NaN IoU = 0)."""
+    iou = np.nan_to_num(np.asarray(ious, float), nan=0.0)
+    if iou.size == 0:
+        return np.full(len(thresholds), np.nan)
+    return (iou[None, :] > np.asarray(thresholds)[:, None]).mean(axis=1)
+
+
+def auc(curve: np.ndarray) -> float:
+    """Area under a success curve sampled at evenly spaced thresholds on [0, 1]: OTB's mean of the samples."""
+    return float(np.mean(curve))
+
+
+def precision_curve(errors_px: np.ndarray, thresholds: np.ndarray = PRECISION_THRESHOLDS) -> np.ndarray:
+    """OTB precision curve: for each threshold (pixels), the share of frames with centre error at most it."""
+    e = np.nan_to_num(np.asarray(errors_px, float), nan=np.inf)
+    if e.size == 0:
+        return np.full(len(thresholds), np.nan)
+    return (e[None, :] <= np.asarray(thresholds)[:, None]).mean(axis=1)
+
+
+def scale_errors(pred_scale: np.ndarray, gt_scale: np.ndarray) -> np.ndarray:
+    """Scale error per frame in percent: ``100 * |pred / gt - 1|`` (scales relative to a common frame)."""
+    return 100.0 * np.abs(np.asarray(pred_scale, float) / np.asarray(gt_scale, float) - 1.0)
+
+
+def rotation_errors(pred_deg: np.ndarray, gt_deg: np.ndarray, period: float = 360.0,
+                    *, unwrapped: bool = True) -> np.ndarray:
+    """Rotation error per frame in degrees.
+
+    Parameters
+    ----------
+    pred_deg, gt_deg : ndarray
+        Cumulative counter-clockwise rotations in degrees, relative to a common frame.
+    period : float
+        Symmetry period of the ground truth's shape: 360 for a full orientation, 180 for a rectangle (which
+        looks the same after half a turn).
+    unwrapped : bool
+        With ``period == 360``, True compares the cumulative angles directly (a missed full turn costs 360);
+        False compares directions (error in [0, 180]). With any smaller period the error is the distance
+        modulo ``period``, in [0, period / 2].
+    """
+    d = np.asarray(pred_deg, float) - np.asarray(gt_deg, float)
+    if unwrapped and period >= 360.0:
+        return np.abs(d)
+    return np.abs((d + period / 2.0) % period - period / 2.0)
+
+
+def _nanmedian(x: np.ndarray) -> float:
+    x = np.asarray(x, float)
+    x = x[np.isfinite(x)] if x.size else x
+    return float(np.median(x)) if x.size else math.nan
+
+
+def score_track(gt: GroundTruth, track: Track) -> dict:
+    """Score a tracker's output against ground truth on the frames both have (see the module notes).
+
+    Parameters
+    ----------
+    gt : GroundTruth
+    track : Track
+        Predictions; frames are matched by index. Frames with ground truth but no prediction are not scored
+        and counted in ``frames_missing``.
+
+    Returns
+    -------
+    dict
+        ``frames_scored``, ``frames_missing``, ``success_rate`` (fraction), ``auc``, ``iou_mean``,
+        ``precision_20`` (fraction), ``centre_error_median_px``, ``scale_error_median_pct``,
+        ``rotation_error_median_deg`` (None where not measurable), ``success_curve`` (21 values),
+        ``precision_curve`` (51 values), and per-frame ``frames``, ``iou``, ``centre_error_px``.
+        Undefined numbers are NaN.
+    """
+    valid = gt.valid
+    pred_index = {int(f): i for i, f in enumerate(track.frames)}
+    gt_frames = np.flatnonzero(valid)
+    in_track = np.array([f in pred_index for f in gt_frames], bool)
+    frames = gt_frames[in_track]
+    rows = np.array([pred_index[int(f)] for f in frames], int)
+    g = gt.boxes[frames]
+    p = track.boxes(rotated=gt.rotated)[rows] if rows.size else np.zeros((0, 5))
+    if gt.rotated:
+        iou = rotated_box_iou(p, g) if rows.size else np.zeros(0)
+    else:
+        iou = box_iou(rotated_to_aabb(p), rotated_to_aabb(g)) if rows.size else np.zeros(0)
+    err = centre_error(p[:, :2], g[:, :2]) if rows.size else np.zeros(0)
+    curve = success_curve(iou)
+    prec = precision_curve(err)
+
+    scale_med = math.nan
+    rot_med = None
+    if rows.size:
+        ps = track.scale[rows] / track.scale[rows[0]]
+        gs = gt.scale[frames] / gt.scale[frames[0]]
+        scale_med = _nanmedian(scale_errors(ps, gs))
+        if gt.rotation_deg is not None and gt.rotation_period:
+            pr = track.rotation_deg[rows]
+            if np.isfinite(pr).any():
+                pr = pr - pr[0]
+                gr = gt.rotation_deg[frames] - gt.rotation_deg[frames[0]]
+                rot_med = _nanmedian(rotation_errors(pr, gr, gt.rotation_period))
+    return {
+        "frames_scored": int(frames.size),
+        "frames_missing": int((~in_track).sum()),
+        "success_rate": success_rate(err, gt.radius[frames]),
+        "auc": auc(curve) if frames.size else math.nan,
+        "iou_mean": float(np.mean(np.nan_to_num(iou))) if frames.size else math.nan,
+        "precision_20": float(np.mean(np.nan_to_num(err, nan=np.inf) <= PRECISION_PX)) if frames.size else math.nan,
+        "centre_error_median_px": _nanmedian(err),
+        "scale_error_median_pct": scale_med,
+        "rotation_error_median_deg": rot_med,
+        "success_curve": curve.tolist(),
+        "precision_curve": prec.tolist(),
+        "frames": frames.tolist(),
+        "iou": iou.tolist(),
+        "centre_error_px": err.tolist(),
+    }

@@ -1,0 +1,132 @@
+"""OpenCV's own trackers as peers of lptrack's, behind the same :class:`Tracker` interface.
+
+Registered names:
+
+``cv-mil``
+    ``cv2.TrackerMIL`` (Babenko et al., CVPR 2009); ships with opencv-python-headless.
+``cv-kcf``
+    ``cv2.TrackerKCF`` (Henriques et al., TPAMI 2015); needs opencv-contrib-python-headless.
+``cv-csrt``
+    ``cv2.TrackerCSRT`` (Lukezic et al., CVPR 2017); needs opencv-contrib-python-headless.
+
+The contrib wheel replaces the plain one (they must not be installed together: uninstall
+``opencv-python-headless`` first, then install ``opencv-contrib-python-headless`` of the same version).
+
+OpenCV's trackers follow an axis-aligned box and measure no rotation. The adapters start them on the ROI's
+axis-aligned bounding box (rounded to whole pixels, as OpenCV takes integer boxes) and report, per frame, the
+ellipse inscribed in the returned box (angle 0), ``scale = sqrt(w*h) / sqrt(w0*h0)`` against the initial box,
+``rotation_deg = None``, and ``score`` 1.0 when OpenCV says ok, else 0.0 (OpenCV gives no confidence). MIL says
+ok even when the target is gone; KCF and CSRT can report a loss. ``init`` seeds OpenCV's random number
+generator (keyword ``seed``, default 0) so that runs are repeatable: MIL draws random samples.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..geometry import Ellipse, ellipse_in_box
+from .base import Tracker, TrackState, register
+
+_CONTRIB_HINT = ("needs opencv-contrib-python-headless instead of opencv-python-headless "
+                 "(swap them: pip uninstall opencv-python-headless && pip install opencv-contrib-python-headless)")
+
+
+class _OpenCVTracker(Tracker):
+    """Shared adapter: subclasses name the ``cv2`` class in ``_cv_class``."""
+
+    measures_rotation = False
+    _cv_class = ""
+
+    def __init__(self, *, seed: int = 0):
+        self.seed = int(seed)
+        self._tracker = None
+        self._size0 = 1.0
+        self._last: TrackState | None = None
+
+    @classmethod
+    def available(cls) -> bool:
+        """Whether this OpenCV build has the tracker class."""
+        try:
+            import cv2
+        except ImportError:  # pragma: no cover - cv2 is a dependency
+            return False
+        return hasattr(cv2, cls._cv_class)
+
+    @classmethod
+    def unavailable_reason(cls) -> str:
+        """Why the tracker cannot be created here, in one line ('' when it can)."""
+        return "" if cls.available() else f"cv2.{cls._cv_class} is not in this OpenCV build; {_CONTRIB_HINT}"
+
+    def _create(self):
+        import cv2
+
+        return getattr(cv2, self._cv_class).create()
+
+    def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
+        x, y, w, h = roi.bounding_box()
+        # OpenCV takes an integer box; round the corners so the box stays centred on the ROI.
+        x0, y0 = int(round(x)), int(round(y))
+        box = (x0, y0, max(int(round(x + w)) - x0, 1), max(int(round(y + h)) - y0, 1))
+        import cv2
+
+        # MIL samples with OpenCV's per-thread RNG; a fixed seed makes runs repeatable (and the same in a
+        # worker process as in the main one), so benchmark numbers do not depend on what ran before.
+        cv2.setRNGSeed(self.seed)
+        self._tracker = self._create()
+        self._tracker.init(_bgr(frame), box)
+        self._size0 = math.sqrt(box[2] * box[3])
+        self._last = self._state(box, 1.0)
+        return self._last
+
+    def update(self, frame: np.ndarray) -> tuple[bool, TrackState]:
+        if self._tracker is None:
+            raise RuntimeError("update() called before init()")
+        ok, box = self._tracker.update(_bgr(frame))
+        box = tuple(float(v) for v in box)
+        if not ok or box[2] <= 0 or box[3] <= 0 or not all(math.isfinite(v) for v in box):
+            return False, TrackState(self._last.ellipse, self._last.scale, None, 0.0)
+        self._last = self._state(box, 1.0)
+        return True, self._last
+
+    def _state(self, box, score: float) -> TrackState:
+        x, y, w, h = box
+        return TrackState(ellipse_in_box(x, y, w, h), math.sqrt(w * h) / self._size0, None, score)
+
+
+def _bgr(frame: np.ndarray) -> np.ndarray:
+    """OpenCV's trackers expect 3-channel images; grey frames are expanded (the caller's array is untouched)."""
+    if frame.ndim == 2:
+        import cv2
+
+        return cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+    return frame
+
+
+@register
+class MILTracker(_OpenCVTracker):
+    """OpenCV's MIL tracker (multiple-instance learning; Babenko, Yang, Belongie, CVPR 2009)."""
+
+    name = "cv-mil"
+    summary = "OpenCV MIL (peer; box only, no rotation)"
+    _cv_class = "TrackerMIL"
+
+
+@register
+class KCFTracker(_OpenCVTracker):
+    """OpenCV's KCF tracker (kernelized correlation filters; Henriques et al., TPAMI 2015). Contrib only."""
+
+    name = "cv-kcf"
+    summary = "OpenCV KCF (peer, contrib wheel; box only, no rotation)"
+    _cv_class = "TrackerKCF"
+
+
+@register
+class CSRTTracker(_OpenCVTracker):
+    """OpenCV's CSRT tracker (discriminative correlation filter with channel and spatial reliability;
+    Lukezic et al., CVPR 2017). Contrib only."""
+
+    name = "cv-csrt"
+    summary = "OpenCV CSRT (peer, contrib wheel; box only, no rotation)"
+    _cv_class = "TrackerCSRT"

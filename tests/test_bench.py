@@ -1,0 +1,204 @@
+"""``lptrack bench`` and ``lptrack eval`` end to end on tiny generated sequences with exact ground truth."""
+
+from __future__ import annotations
+
+import json
+import math
+import pickle
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from logpolar_track.bench import run_bench, run_one
+from logpolar_track.cli import main
+from logpolar_track.datasets import discover
+from logpolar_track.geometry import Ellipse
+from logpolar_track.synthetic import similarity_path, synthetic_sequence
+from logpolar_track.trackers import base
+from logpolar_track.trackers.base import Tracker, TrackState
+from logpolar_track.trackers.opencv import CSRTTracker, KCFTracker
+
+N_FRAMES = 12
+_TRUTH: dict[str, list] = {}  # ROI spec -> per-frame ellipses, scales, rotations (for the oracle below)
+
+
+def _write_sequence(folder: Path, name: str, start, seed: int) -> None:
+    roi = Ellipse(start[0], start[1], 18.0, 14.0, 20.0)
+    poses = similarity_path(N_FRAMES, start, scale_range=(0.9, 1.15), turns=0.1, radius_px=6.0)
+    frames = list(synthetic_sequence(poses, roi, size=(160, 120), seed=seed, noise=1.0))
+    writer = cv2.VideoWriter(str(folder / f"{name}.avi"), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (160, 120))
+    assert writer.isOpened(), "test set-up: cannot open an MJPG writer"
+    for f in frames:
+        writer.write(f)
+    writer.release()
+    rows, truth = [], []
+    for i, p in enumerate(poses):
+        e = roi.moved(p.cx, p.cy, p.scale, p.rotation_deg)
+        rows.append(f"{i},{e.cx!r},{e.cy!r},{e.a!r},{e.b!r},{e.angle_deg!r},{p.scale!r},{p.rotation_deg!r}\n")
+        truth.append((e, p.scale, p.rotation_deg))
+    (folder / f"{name}.gt.csv").write_text("frame,cx,cy,a,b,angle_deg,scale,rotation_deg\n" + "".join(rows))
+    (folder / f"{name}.roi").write_text(roi.to_spec() + "\n")
+    _TRUTH[roi.to_spec()] = truth
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("bench_ds")
+    _write_sequence(folder, "alpha", (70.0, 55.0), seed=1)
+    _write_sequence(folder, "beta", (85.0, 62.0), seed=2)
+    return folder
+
+
+class _Oracle(Tracker):
+    """Reports the ground truth exactly: its scores pin down the scoring, not a tracker."""
+
+    name = "test-oracle"
+    summary = "test only"
+
+    def init(self, frame, roi):
+        self.truth, self.i = _TRUTH[roi.to_spec()], 0
+        return self._state()
+
+    def update(self, frame):
+        self.i += 1
+        return True, self._state()
+
+    def _state(self):
+        e, s, r = self.truth[self.i]
+        return TrackState(e, s, r, 1.0)
+
+
+@pytest.fixture
+def oracle(monkeypatch):
+    monkeypatch.setitem(base._REGISTRY, _Oracle.name, _Oracle)
+    return _Oracle.name
+
+
+def _run(*args):
+    return CliRunner().invoke(main, list(map(str, args)))
+
+
+def test_bench_end_to_end_json(dataset, oracle, tmp_path):
+    out = tmp_path / "bench.json"
+    res = _run("bench", "--dataset", dataset, "--trackers", f"fixed,cv-mil,{oracle}", "--json", out, "--quiet")
+    assert res.exit_code == 0, res.output + res.stderr
+    doc = json.loads(out.read_text())
+    assert doc["schema_version"] == 1 and doc["tool"] == "lptrack bench"
+    assert set(doc["versions"]) >= {"lptrack", "python", "numpy", "opencv"}
+    assert doc["machine"]["cpu_count"] >= 1
+    assert doc["parameters"]["trackers"] == ["fixed", "cv-mil", oracle]
+    assert [s["name"] for s in doc["sequences"]] == ["alpha", "beta"]
+    pairs = [(r["sequence"], r["tracker"]) for r in doc["results"]]
+    assert pairs == [(s, t) for s in ("alpha", "beta") for t in ("fixed", "cv-mil", oracle)]
+    assert "iou" not in doc["results"][0]  # per-frame arrays only with --per-frame
+    for r in doc["results"]:
+        assert r["frames_scored"] == N_FRAMES and r["error"] is None and len(r["success_curve"]) == 21
+        if r["tracker"] == oracle:  # exact ground truth back: every metric at its best
+            assert r["success_rate"] == 1.0 and r["auc"] == pytest.approx(20 / 21)
+            assert r["centre_error_median_px"] == pytest.approx(0, abs=1e-9)
+            assert r["scale_error_median_pct"] == pytest.approx(0, abs=1e-9)
+            assert r["rotation_error_median_deg"] == pytest.approx(0, abs=1e-9)
+        if r["tracker"] == "cv-mil":
+            assert r["rotation_error_median_deg"] is None and r["fps"] > 0
+        if r["tracker"] == "fixed":  # a slow, gentle synthetic path: the thesis tracker keeps the object
+            assert r["success_rate"] >= 0.9 and r["centre_error_median_px"] < 2.0
+    summary = {s["tracker"]: s for s in doc["summary"]}
+    assert summary[oracle]["auc"] == pytest.approx(20 / 21) and summary["cv-mil"]["rotation_error_median_deg"] is None
+    table = res.stdout.splitlines()
+    assert table[0].split()[:4] == ["sequence", "tracker", "frames", "success%"]
+    assert sum(line.startswith("mean (2)") for line in table) == 3
+    assert any(line.split()[:2] == ["alpha", oracle] and line.split()[3] == "100.0" for line in table)
+
+
+def test_bench_json_to_stdout_is_only_json(dataset, tmp_path):
+    res = _run("bench", "--dataset", dataset, "--trackers", "cv-mil", "--json", "-", "--per-frame", "-q")
+    assert res.exit_code == 0, res.stderr
+    doc = json.loads(res.stdout)
+    assert len(doc["results"][0]["iou"]) == N_FRAMES
+    assert "mean (2)" in res.stderr  # the table went to stderr
+
+
+def test_run_bench_in_processes_keeps_order_and_numbers(dataset):
+    seqs = discover(dataset)
+    pickle.dumps((seqs, run_one))  # what a process pool (or a Dask cluster) has to ship
+    one = run_bench(seqs, ["fixed", "cv-mil"], jobs=1)
+    two = run_bench(seqs, ["fixed", "cv-mil"], jobs=2)
+    again = run_bench(seqs[::-1], ["cv-mil"], jobs=2)
+    assert [(r["sequence"], r["tracker"]) for r in two] == [(r["sequence"], r["tracker"]) for r in one]
+    for a, b in zip(one, two):
+        if a["tracker"] == "fixed":  # deterministic in any process
+            assert a["iou"] == b["iou"] and a["centre_error_px"] == b["centre_error_px"]
+    # MIL (random inside OpenCV) repeats exactly with a fresh process per pair, whatever the order.
+    mil = {r["sequence"]: r["iou"] for r in two if r["tracker"] == "cv-mil"}
+    assert {r["sequence"]: r["iou"] for r in again} == mil
+
+
+def test_unknown_tracker_is_a_usage_error(dataset):
+    res = _run("bench", "--dataset", dataset, "--trackers", "fixed,nosuch")
+    assert res.exit_code == 2 and "unknown tracker 'nosuch'" in res.stderr
+    assert res.stdout == ""
+
+
+@pytest.mark.skipif(KCFTracker.available(), reason="opencv-contrib is installed: KCF/CSRT are available")
+def test_contrib_peers_skipped_cleanly_without_contrib(dataset):
+    res = _run("bench", "--dataset", dataset, "--trackers", "cv-kcf,cv-mil,cv-csrt")
+    assert res.exit_code == 0, res.stderr
+    assert "skipping cv-kcf" in res.stderr and "opencv-contrib-python-headless" in res.stderr
+    rows = [line.split() for line in res.stdout.splitlines()[2:]]
+    trackers = {r[1] for r in rows if r and r[0] not in ("mean", "--------")}
+    assert trackers == {"cv-mil"}
+
+
+@pytest.mark.skipif(not (KCFTracker.available() and CSRTTracker.available()), reason="needs opencv-contrib")
+def test_contrib_peers_run_when_present(dataset):
+    results = run_bench(discover(dataset), ["cv-kcf", "cv-csrt"])
+    for r in results:
+        assert r["error"] is None and r["frames_scored"] == N_FRAMES and r["rotation_error_median_deg"] is None
+        assert math.isfinite(r["scale_error_median_pct"]) and r["success_rate"] >= 0.5
+
+
+def _write_run_csv(path: Path, truth, shift: float = 0.0) -> None:
+    lines = ["frame,time_s,cx,cy,a,b,angle_deg,scale,rotation_deg,score,status\n"]
+    for i, (e, s, r) in enumerate(truth):
+        lines.append(f"{i},{i / 25:.6f},{e.cx + shift:.4f},{e.cy:.4f},{e.a:.4f},{e.b:.4f},{e.angle_deg:.4f},"
+                     f"{s:.6f},{r:.4f},1,{'init' if i == 0 else 'tracked'}\n")
+    path.write_text("".join(lines))
+
+
+def test_eval_scores_a_run_csv(dataset, tmp_path):
+    truth = _TRUTH[(dataset / "alpha.roi").read_text().strip()]
+    pred = tmp_path / "alpha.csv"
+    _write_run_csv(pred, truth, shift=5.0)
+    res = _run("eval", pred, dataset / "alpha.gt.csv", "--json", "-")
+    assert res.exit_code == 0, res.stderr
+    m = json.loads(res.stdout)["metrics"]
+    assert m["frames_scored"] == N_FRAMES and m["centre_error_median_px"] == pytest.approx(5.0, abs=1e-3)
+    assert m["rotation_error_median_deg"] == pytest.approx(0, abs=1e-3)
+    assert m["success_rate"] == 0.0  # 5 px >= 25 % of the radius sqrt(18*14) * scale <= 15.9 * 1.15 px
+    res = _run("eval", pred, dataset)  # a folder with two sequences is ambiguous
+    assert res.exit_code == 2 and "2 sequences" in res.stderr
+    _write_run_csv(pred, truth)
+    res = _run("eval", pred, dataset / "alpha.gt.csv")
+    assert res.exit_code == 0 and res.stdout.splitlines()[2].split()[3] == "100.0"
+
+
+def test_eval_rejects_unreadable_prediction(dataset, tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("frame,cx\n0,1\n")
+    res = _run("eval", bad, dataset / "alpha.gt.csv")
+    assert res.exit_code == 1 and res.stderr.startswith("lptrack: error:") and "lacks column" in res.stderr
+
+
+def test_plot(dataset, tmp_path):
+    png = tmp_path / "plot.png"
+    res = _run("bench", "--dataset", dataset, "--trackers", "cv-mil", "--plot", png, "-q")
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        assert res.exit_code == 2 and "pip install 'lptrack[plot]'" in res.stderr and not png.exists()
+        return
+    assert res.exit_code == 0, res.stderr
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

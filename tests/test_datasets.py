@@ -1,0 +1,152 @@
+"""Dataset discovery and streaming (logpolar_track.datasets) on tiny fixtures of every layout."""
+
+from __future__ import annotations
+
+import inspect
+import math
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from logpolar_track.datasets import discover, load_ground_truth
+from logpolar_track.errors import UsageError
+from logpolar_track.evaluate import rotated_box_corners
+
+SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+
+
+def _images(folder: Path, n: int, *, digits: int = 4, grey: bool = False, size=(48, 32)) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    for i in range(1, n + 1):
+        img = np.full((size[1], size[0]) if grey else (size[1], size[0], 3), 10 * i, np.uint8)
+        cv2.imwrite(str(folder / f"{i:0{digits}d}.jpg"), img)
+    return folder
+
+
+def _otb(root: Path, name: str, n_frames: int, lines: list[str], sep: str = ",", newline: str = "\n") -> Path:
+    seq = root / name
+    _images(seq / "img", n_frames, grey=True)
+    (seq / "groundtruth_rect.txt").write_text(newline.join(line.replace(",", sep) for line in lines) + newline)
+    return seq
+
+
+def test_otb_folder_commas_more_frames_than_lines(tmp_path):
+    seq_dir = _otb(tmp_path, "walk", 5, ["11,21,10,6", "12,21,10,6", "13,21,10,6"])
+    (seq,) = discover(seq_dir)
+    assert (seq.name, seq.kind, seq.n_frames, seq.start) == ("walk", "otb", 5, 0)
+    assert seq.gt.valid.tolist() == [True, True, True, False, False]  # frames past the last line: unscored
+    assert (seq.roi.cx, seq.roi.cy, seq.roi.a, seq.roi.b) == (15, 23, 5, 3)  # 1-based x=11 -> 10, +w/2
+
+
+def test_otb_tabs_crlf_and_leading_nan_line(tmp_path):
+    seq_dir = _otb(tmp_path, "toy", 4, ["NaN,NaN,NaN,NaN", "1,1,8,8", "2,1,8,8", "3,1,8,8"], sep="\t",
+                   newline="\r\n")
+    (seq,) = discover(seq_dir)
+    assert seq.start == 1  # the tracker starts on the first frame with ground truth
+    assert seq.gt.valid.tolist() == [False, True, True, True]
+    assert (seq.roi.cx, seq.roi.cy) == (4, 4)
+
+
+def test_spaces_and_more_lines_than_frames(tmp_path):
+    seq_dir = _otb(tmp_path, "s", 2, ["1 1 8 8", "2 1 8 8", "3 1 8 8"], sep=" ")
+    (seq,) = discover(seq_dir)
+    assert len(seq.gt) == 2 and seq.n_frames == 2
+
+
+def test_frames_are_streamed_bgr_in_natural_order(tmp_path):
+    seq_dir = _otb(tmp_path, "s", 3, ["1,1,8,8"] * 3)
+    (seq,) = discover(seq_dir)
+    frames = seq.frames()
+    assert inspect.isgenerator(frames)
+    got = list(frames)
+    assert [i for i, _, _ in got] == [0, 1, 2]
+    assert got[1][1] == pytest.approx(1 / 30)
+    assert all(f.shape == (32, 48, 3) and f.dtype == np.uint8 for _, _, f in got)  # grey JPEGs come as BGR
+    assert [int(f.mean()) for _, _, f in got] == pytest.approx([10, 20, 30], abs=2)
+
+
+def test_vot_polygons_in_imgs_and_color_and_folder(tmp_path):
+    lines = []
+    for i, angle in enumerate([20, 25, 30]):
+        poly = rotated_box_corners([24, 16, 20, 8, angle])[[(i + k) % 4 for k in range(4)]]
+        lines.append(",".join(f"{v:.3f}" for v in poly.ravel()))
+    for where in ("imgs", "color", "."):
+        seq_dir = tmp_path / f"vot_{where.strip('.') or 'flat'}"
+        _images(seq_dir / where, 3, digits=8)
+        (seq_dir / "groundtruth.txt").write_text("\n".join(lines) + "\n")
+        (seq,) = discover(seq_dir)
+        assert seq.kind == "vot" and seq.n_frames == 3 and seq.gt.rotated
+        assert (seq.roi.cx, seq.roi.cy, seq.roi.a, seq.roi.b, seq.roi.angle_deg) == pytest.approx(
+            (24, 16, 10, 4, 20), abs=1e-2)
+        np.testing.assert_allclose(seq.gt.rotation_deg, [0, 5, 10], atol=1e-2)
+
+
+def test_vot_four_number_lines_are_zero_based_boxes(tmp_path):
+    seq_dir = tmp_path / "v"
+    _images(seq_dir, 2, digits=8)
+    (seq_dir / "groundtruth.txt").write_text("10,20,8,6\n11,20,8,6\n")
+    (seq,) = discover(seq_dir)
+    assert not seq.gt.rotated and (seq.roi.cx, seq.roi.cy) == (14, 23)
+
+
+def test_uav123_folder(tmp_path):
+    seq_dir = tmp_path / "boat9"
+    _images(seq_dir / "img", 3, digits=6)
+    (seq_dir / "boat9.txt").write_text("5,5,10,10\nNaN,NaN,NaN,NaN\n6,5,10,10\n")
+    (seq,) = discover(seq_dir)
+    assert seq.kind == "uav123" and seq.gt.valid.tolist() == [True, False, True]
+
+
+def test_folder_of_folders_in_natural_order_and_empty(tmp_path):
+    for name in ("b10", "b2", "a"):
+        _otb(tmp_path / "set", name, 2, ["1,1,8,8"] * 2)
+    (tmp_path / "set" / "notes").mkdir()
+    assert [s.name for s in discover(tmp_path / "set")] == ["a", "b2", "b10"]
+    assert discover(tmp_path / "set" / "notes") == []
+    with pytest.raises(UsageError, match="does not exist"):
+        discover(tmp_path / "missing")
+
+
+def test_lptrack_sample_video_with_gt_and_roi(tmp_path):
+    frames = [np.full((40, 64, 3), 20 * i, np.uint8) for i in range(4)]
+    writer = cv2.VideoWriter(str(tmp_path / "disc.avi"), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (64, 40))
+    assert writer.isOpened()
+    for f in frames:
+        writer.write(f)
+    writer.release()
+    (tmp_path / "disc.gt.csv").write_text("frame,cx,cy,a,b,angle_deg,scale,rotation_deg\n"
+                                          + "".join(f"{i},{30 + i},20,10,10,0,1,{5 * i}\n" for i in range(4)))
+    (tmp_path / "disc.roi").write_text("30,20,9\n")
+    (seq,) = discover(tmp_path)
+    assert (seq.name, seq.kind, seq.start, seq.fps) == ("disc", "lptrack", 0, 25.0)
+    assert seq.roi.to_spec() == "30,20,9"  # the .roi sidecar wins over the first ground-truth row
+    assert [i for i, _, _ in seq.frames()] == [0, 1, 2, 3]
+    assert seq.gt.rotation_deg.tolist() == [0, 5, 10, 15]
+    assert load_ground_truth(tmp_path).rotation_deg.tolist() == [0, 5, 10, 15]
+
+
+@pytest.mark.skipif(not SHARED_DATA.is_dir(), reason="../shared/data (real benchmark sequences) is absent")
+def test_shared_benchmark_sequences():
+    seqs = {s.name: s for s in discover(SHARED_DATA)}
+    expected = {"bag": 196, "boat1": 301, "crossing": 120, "freeman1": 326, "human3": 199, "motorrolling": 164,
+                "toy": 271}
+    assert {n: s.n_frames for n, s in seqs.items()} == expected
+    assert {n: s.kind for n, s in seqs.items()} == {"bag": "vot", "boat1": "uav123", "crossing": "otb",
+                                                   "freeman1": "otb", "human3": "otb", "motorrolling": "otb",
+                                                   "toy": "otb"}
+    for s in seqs.values():
+        assert s.start == 0 and s.gt.valid.all() and len(s.gt) == s.n_frames
+    # First boxes (1-based x,y,w,h in the files) -> inscribed ellipses in 0-based pixels.
+    assert seqs["crossing"].roi.to_spec() == "212.5,175,8.5,25,0"    # 205,151,17,50 (tabs)
+    assert seqs["motorrolling"].roi.to_spec() == "177,129.5,61,62.5,0"  # 117,68,122,125
+    assert seqs["toy"].roi.to_spec() == "171,134.5,20,33.5,0"        # tab-separated, CRLF
+    bag = seqs["bag"].roi  # rotated quadrilateral 291.8,203.6,396.4,264.3,442.2,185.4,337.6,124.7
+    assert (bag.cx, bag.cy) == pytest.approx((367.0, 194.5), abs=0.5)
+    assert (bag.a, bag.b) == pytest.approx((60.4, 45.6), abs=0.3)
+    assert bag.angle_deg == pytest.approx(-30.1, abs=0.3)  # long side runs down-right on screen
+    assert seqs["bag"].gt.rotated and not seqs["toy"].gt.rotated
+    _, _, frame = next(seqs["human3"].frames())
+    assert frame.shape == (640, 480, 3)
+    assert math.isfinite(seqs["boat1"].gt.scale[-1])

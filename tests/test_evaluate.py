@@ -1,0 +1,245 @@
+"""Metrics and ground-truth readers of logpolar_track.evaluate, on cases computed by hand."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from logpolar_track.evaluate import (GroundTruthError, Track, auc, box_iou, ground_truth_from_boxes,
+                                     ground_truth_from_ellipses, precision_curve, read_box_text, read_gt_csv,
+                                     read_track_csv, rect_from_polygon, rotated_box_corners, rotated_box_iou,
+                                     rotation_errors, scale_errors, score_track, success_curve, success_rate,
+                                     unwrap_rects)
+
+
+# ---------------------------------------------------------------------------------------------- IoU
+
+def test_box_iou_hand_computed():
+    a = np.array([[0, 0, 2, 2], [0, 0, 2, 2], [0, 0, 2, 2], [0, 0, 4, 4]], float)
+    b = np.array([[1, 0, 2, 2], [5, 5, 1, 1], [0, 0, 2, 2], [1, 1, 2, 2]], float)
+    # overlap 1x2=2, union 4+4-2=6 -> 1/3; disjoint; identical; contained 4/16.
+    np.testing.assert_allclose(box_iou(a, b), [1 / 3, 0.0, 1.0, 0.25])
+
+
+def test_box_iou_nan_rows_are_nan():
+    out = box_iou([[0, 0, 2, 2], [np.nan] * 4], [[0, 0, 2, 2], [0, 0, 1, 1]])
+    assert out[0] == 1.0 and math.isnan(out[1])
+
+
+def test_rotated_iou_square_and_its_45_degree_turn():
+    # Two 2x2 squares on one centre, one turned 45 deg: the overlap is a regular octagon of area 8(sqrt2 - 1).
+    inter = 8 * (math.sqrt(2) - 1)
+    expected = inter / (8 - inter)
+    np.testing.assert_allclose(rotated_box_iou([0, 0, 2, 2, 0], [0, 0, 2, 2, 45]), [expected], rtol=1e-9)
+
+
+def test_rotated_iou_symmetries_of_a_rectangle():
+    base = [10, 20, 8, 2, 30]
+    same = [[10, 20, 8, 2, 210], [10, 20, 2, 8, 120], [10, 20, 8, 2, -150]]
+    np.testing.assert_allclose(rotated_box_iou([base] * 3, same), [1, 1, 1], atol=1e-9)
+    # A quarter turn of a thin 8x2 bar on its centre: overlap 2x2=4, union 16+16-4=28.
+    np.testing.assert_allclose(rotated_box_iou(base, [10, 20, 8, 2, 120]), [4 / 28], rtol=1e-9)
+
+
+def test_rotated_iou_matches_axis_aligned_iou_at_angle_zero():
+    rng = np.random.default_rng(3)
+    xy = rng.uniform(0, 20, (50, 2))
+    wh = rng.uniform(1, 15, (50, 2))
+    a = np.column_stack([xy, wh])
+    b = np.column_stack([xy + rng.uniform(-8, 8, (50, 2)), wh * rng.uniform(0.5, 1.5, (50, 2))])
+    rot = lambda boxes: np.column_stack([boxes[:, :2] + boxes[:, 2:] / 2, boxes[:, 2:], np.zeros(len(boxes))])
+    np.testing.assert_allclose(rotated_box_iou(rot(a), rot(b)), box_iou(a, b), atol=1e-9)
+
+
+def test_rotated_box_corners_follow_the_ccw_on_screen_convention():
+    # Side w (length 4) at 90 deg CCW on screen points up (-y): corners at y = cy -/+ 2, x = cx -/+ 1.
+    corners = rotated_box_corners([10, 10, 4, 2, 90])
+    np.testing.assert_allclose(sorted(corners[:, 0]), [9, 9, 11, 11], atol=1e-12)
+    np.testing.assert_allclose(sorted(corners[:, 1]), [8, 8, 12, 12], atol=1e-12)
+    # At 30 deg the w side's direction is (cos 30, -sin 30): up and to the right.
+    c = rotated_box_corners([0, 0, 2, 1e-9, 30])
+    d = c[0] - c[1]
+    np.testing.assert_allclose(d / np.hypot(*d), [math.cos(math.radians(30)), -math.sin(math.radians(30))])
+
+
+# ---------------------------------------------------------------------------- polygons and unwrapping
+
+def _polygon(cx, cy, w, h, angle):
+    return rotated_box_corners([cx, cy, w, h, angle])
+
+
+@pytest.mark.parametrize("order", [(0, 1, 2, 3), (2, 3, 0, 1), (1, 0, 3, 2), (3, 2, 1, 0)])
+def test_rect_from_polygon_recovers_the_rectangle_in_any_corner_order(order):
+    poly = _polygon(50, 40, 30, 12, 25)[list(order)]
+    cx, cy, w, h, angle = rect_from_polygon(poly)
+    assert (cx, cy) == pytest.approx((50, 40), abs=1e-3)
+    # Same rectangle up to the symmetries: compare by IoU.
+    assert rotated_box_iou([cx, cy, w, h, angle], [50, 40, 30, 12, 25])[0] == pytest.approx(1, abs=1e-4)
+
+
+def test_unwrap_rects_follows_two_turns_whatever_the_fit_reports():
+    truth = np.arange(0, 720, 17.0)  # 17 deg per frame counter-clockwise, over two turns
+    rng = np.random.default_rng(0)
+    rects = []
+    for t in truth:
+        k = int(rng.integers(0, 4))  # report an equivalent variant: +90k, sides swapped for odd k
+        w, h = (30.0, 12.0) if k % 2 == 0 else (12.0, 30.0)
+        rects.append((0, 0, w, h, t + 90 * k - 360 * int(rng.integers(-1, 2))))
+    out = unwrap_rects(np.array(rects))
+    np.testing.assert_allclose(out[:, 4], truth, atol=1e-9)
+    np.testing.assert_allclose(out[:, 2:4], np.tile([30.0, 12.0], (len(truth), 1)))
+
+
+def test_unwrap_rects_first_rect_long_side_first_and_nan_rows_kept():
+    out = unwrap_rects(np.array([[0, 0, 5, 10, 170], [np.nan] * 5, [0, 0, 10, 5, 265]]))
+    assert out[0, 2] == 10 and out[0, 3] == 5 and out[0, 4] == pytest.approx(80)  # 170+90=260 -> 80
+    assert np.isnan(out[1]).all()
+    assert out[2, 4] == pytest.approx(85)
+
+
+# ---------------------------------------------------------------------------------- curves and rates
+
+def test_success_curve_and_auc_of_a_known_set():
+    curve = success_curve(np.array([0.0, 0.5, 1.0]))
+    assert len(curve) == 21
+    # t = 0, 0.05, ..., 0.45 (10 thresholds): 2 of 3 above; t = 0.5..0.95 (10): 1 of 3; t = 1: none.
+    np.testing.assert_allclose(curve[:10], 2 / 3)
+    np.testing.assert_allclose(curve[10:20], 1 / 3)
+    assert curve[20] == 0
+    assert auc(curve) == pytest.approx(10 / 21)
+    # A perfect tracker scores 20/21 under OTB's strict "IoU > t" at the 21 thresholds.
+    assert auc(success_curve(np.ones(7))) == pytest.approx(20 / 21)
+
+
+def test_precision_and_success_rate():
+    errors = np.array([0.0, 10.0, 20.0, 30.0, np.nan])
+    curve = precision_curve(errors)
+    assert curve[20] == pytest.approx(3 / 5)  # at most 20 px; NaN counts as a miss
+    assert curve[0] == pytest.approx(1 / 5)
+    assert success_rate(np.array([1.0, 3.0, 2.4]), np.array([10.0, 10.0, 10.0])) == pytest.approx(2 / 3)
+
+
+def test_scale_and_rotation_errors():
+    np.testing.assert_allclose(scale_errors([1.1, 0.9, 2.0], [1.0, 1.0, 2.5]), [10, 10, 20])
+    # Unwrapped, full turn known: a missed turn costs 360 degrees.
+    np.testing.assert_allclose(rotation_errors([370.0, -5.0], [10.0, 5.0]), [360, 10])
+    # Rectangle ground truth (180-symmetric): modulo 180, in [0, 90].
+    np.testing.assert_allclose(rotation_errors([190.0, 100.0, -95.0], [10.0, 0.0, 0.0], 180), [0, 80, 85])
+
+
+# ------------------------------------------------------------------------------------------- scoring
+
+def _ellipse_track(ellipses, scale, rotation):
+    e = np.asarray(ellipses, float)
+    return Track(np.arange(len(e)), e, np.asarray(scale, float), np.asarray(rotation, float), np.ones(len(e)))
+
+
+def test_score_track_perfect_rotating_ellipse():
+    n = 30
+    rot = np.linspace(0, 400, n)  # more than a turn
+    scale = np.linspace(1, 2, n)
+    e = np.column_stack([np.linspace(50, 80, n), np.full(n, 40), 20 * scale, 10 * scale, 15 + rot])
+    gt = ground_truth_from_ellipses(e, scale, rot)
+    m = score_track(gt, _ellipse_track(e, scale, rot))
+    assert m["frames_scored"] == n and m["success_rate"] == 1.0
+    assert m["auc"] == pytest.approx(20 / 21)
+    assert m["centre_error_median_px"] == 0 and m["scale_error_median_pct"] == pytest.approx(0, abs=1e-9)
+    assert m["rotation_error_median_deg"] == pytest.approx(0, abs=1e-9)
+
+
+def test_score_track_errors_are_measured():
+    n = 10
+    e = np.tile([50.0, 40, 20, 20, 0], (n, 1))
+    gt = ground_truth_from_ellipses(e, np.ones(n), np.zeros(n))
+    moved = e.copy()
+    moved[:, 0] += 3.0  # 3 px off: below 25 % of the 20 px radius (5 px)
+    track = _ellipse_track(moved, np.full(n, 1.0), np.r_[0.0, np.full(n - 1, 360.0 + 4)])
+    m = score_track(gt, track)
+    assert m["success_rate"] == 1.0 and m["centre_error_median_px"] == pytest.approx(3)
+    assert m["rotation_error_median_deg"] == pytest.approx(364)  # an extra turn is an error, unwrapped
+    moved[:, 0] += 3.0  # 6 px: a failure
+    assert score_track(gt, _ellipse_track(moved, np.ones(n), np.zeros(n)))["success_rate"] == 0.0
+
+
+def test_score_track_axis_aligned_gt_compares_ellipse_bounding_box():
+    gt = ground_truth_from_boxes(np.array([[10.0, 10, 20, 40]]))
+    # Ellipse with a=20, b=10 turned 90 deg: its bounding box is 20 wide, 40 high = the ground-truth box.
+    track = _ellipse_track([[20.0, 30, 20, 10, 90]], [1.0], [np.nan])
+    m = score_track(gt, track)
+    assert m["iou"][0] == pytest.approx(1.0)
+    assert m["rotation_error_median_deg"] is None
+
+
+def test_score_track_skips_unscored_and_missing_frames():
+    boxes = np.tile([0.0, 0, 10, 10], (6, 1))
+    boxes[2] = np.nan
+    gt = ground_truth_from_boxes(boxes)
+    track = _ellipse_track(np.tile([5.0, 5, 5, 5, 0], (4, 1)), np.ones(4), np.full(4, np.nan))  # frames 0..3
+    m = score_track(gt, track)
+    assert m["frames"] == [0, 1, 3] and m["frames_missing"] == 2
+
+
+# ----------------------------------------------------------------------------------------- readers
+
+@pytest.mark.parametrize("sep", [",", "\t", " "])
+def test_read_box_text_separators_nan_and_one_based(tmp_path, sep):
+    p = tmp_path / "groundtruth_rect.txt"
+    lines = [sep.join(["11", "21", "30", "40"]), sep.join(["NaN"] * 4), sep.join(["12", "22", "0", "0"]), ""]
+    p.write_text("\r\n".join(lines))
+    gt = read_box_text(p)
+    assert gt.source == "otb" and not gt.rotated and len(gt) == 3
+    assert gt.valid.tolist() == [True, False, False]  # NaN line, zero-size box: unscored
+    np.testing.assert_allclose(gt.boxes[0], [10 + 15, 20 + 20, 30, 40, 0])  # 1-based -> 0-based centre
+    roi = gt.initial_roi()
+    assert (roi.cx, roi.cy, roi.a, roi.b, roi.angle_deg) == (25, 40, 15, 20, 0)
+
+
+def test_read_box_text_vot_polygons(tmp_path):
+    p = tmp_path / "groundtruth.txt"
+    rows = []
+    for i, angle in enumerate([10, 30, 50, 70, 90, 110]):
+        poly = _polygon(100, 80, 40, 20, angle)[[(i + k) % 4 for k in range(4)]]  # corner order varies
+        rows.append(",".join(f"{v:.4f}" for v in poly.ravel()))
+    rows.insert(3, "NaN,NaN,NaN,NaN,NaN,NaN,NaN,NaN")
+    p.write_text("\n".join(rows) + "\n")
+    gt = read_box_text(p)
+    assert gt.source == "vot" and gt.rotated and gt.rotation_period == 180
+    valid = gt.valid
+    assert valid.tolist() == [True, True, True, False, True, True, True]
+    np.testing.assert_allclose(gt.boxes[valid, 4], [10, 30, 50, 70, 90, 110], atol=1e-3)
+    np.testing.assert_allclose(gt.rotation_deg[valid], [0, 20, 40, 60, 80, 100], atol=1e-3)
+    np.testing.assert_allclose(gt.boxes[valid, 2:4], np.tile([40, 20], (6, 1)), atol=1e-3)
+    roi = gt.initial_roi()
+    assert (roi.a, roi.b, roi.angle_deg) == pytest.approx((20, 10, 10), abs=1e-3)
+
+
+def test_read_box_text_rejects_bad_lines(tmp_path):
+    p = tmp_path / "x.txt"
+    p.write_text("1,2,3\n")
+    with pytest.raises(GroundTruthError, match="expected 4"):
+        read_box_text(p)
+    p.write_text("1,2,three,4\n")
+    with pytest.raises(GroundTruthError, match="line 1"):
+        read_box_text(p)
+
+
+def test_read_gt_csv_and_run_csv(tmp_path):
+    gt_path = tmp_path / "s.gt.csv"
+    gt_path.write_text("frame,cx,cy,a,b,angle_deg,scale,rotation_deg\n"
+                       "0,50,40,20,10,30,1,0\n1,51,40,22,11,40,1.1,10\n3,52,41,24,12,400,1.2,370\n")
+    gt = read_gt_csv(gt_path)
+    assert len(gt) == 4 and gt.valid.tolist() == [True, True, False, True]  # frame 2 has no row
+    assert gt.rotation_deg[3] == 370 and gt.scale[1] == pytest.approx(1.1)
+    np.testing.assert_allclose(gt.radius[0], math.sqrt(20 * 10))
+    run = tmp_path / "run.csv"
+    run.write_text("frame,time_s,cx,cy,a,b,angle_deg,scale,rotation_deg,score,status\n"
+                   "0,0,50,40,20,10,30,1,,1,init\n1,0.04,52,40,22,11,40,1.1,n/a,0.9,tracked\n")
+    track = read_track_csv(run)
+    assert track.frames.tolist() == [0, 1] and np.isnan(track.rotation_deg).all()
+    m = score_track(gt, track)
+    assert m["frames_scored"] == 2 and m["centre_error_median_px"] == pytest.approx(0.5)
+    (tmp_path / "bad.csv").write_text("frame,cx\n0,1\n")
+    with pytest.raises(GroundTruthError, match="lacks column"):
+        read_gt_csv(tmp_path / "bad.csv")

@@ -63,3 +63,4 @@ def fail(message: str, code: int = EXIT_USAGE) -> "None":
 # --- command modules ---
 from . import run  # noqa: E402,F401
 from . import bench  # noqa: E402,F401
+from . import samples  # noqa: E402,F401

@@ -17,7 +17,9 @@ overlap (IoU)
     Intersection over union of the tracker's box and the ground-truth box. When the ground truth is
     axis-aligned the tracker's box is the axis-aligned bounding box of its ellipse; when the ground truth is
     rotated (VOT polygons, lptrack ``.gt.csv`` ellipses) it is the ellipse's own rectangle
-    ``(cx, cy, 2a, 2b, angle)``, and the ground truth of a ``.gt.csv`` is likewise its ellipse's rectangle.
+    ``(cx, cy, 2a, 2b, angle)``, and the ground truth of a ``.gt.csv`` is likewise its ellipse's rectangle
+    -- except where that ellipse is a circle, which has no orientation to miss: there the axis-aligned
+    bounding boxes are compared.
 success rate
     Share of scored frames whose centre error is **below 25 % of the object's ground-truth radius**, the radius
     being ``sqrt(w*h)/2`` of the ground-truth box (``sqrt(a*b)`` for an ellipse: the radius of the circle of
@@ -683,6 +685,14 @@ def rotation_errors(pred_deg: np.ndarray, gt_deg: np.ndarray, period: float = 36
     return np.abs((d + period / 2.0) % period - period / 2.0)
 
 
+def _circles(gt: GroundTruth, frames: np.ndarray) -> np.ndarray:
+    """Which of ``frames`` have a circular ground-truth ellipse (a == b within 0.1 %)."""
+    if gt.ellipses is None:
+        return np.zeros(len(frames), bool)
+    e = gt.ellipses[frames]
+    return np.isclose(e[:, 2], e[:, 3], rtol=1e-3)
+
+
 def _nanmedian(x: np.ndarray) -> float:
     x = np.asarray(x, float)
     x = x[np.isfinite(x)] if x.size else x
@@ -716,10 +726,19 @@ def score_track(gt: GroundTruth, track: Track) -> dict:
     rows = np.array([pred_index[int(f)] for f in frames], int)
     g = gt.boxes[frames]
     p = track.boxes(rotated=gt.rotated)[rows] if rows.size else np.zeros((0, 5))
-    if gt.rotated:
-        iou = rotated_box_iou(p, g) if rows.size else np.zeros(0)
-    else:
-        iou = box_iou(rotated_to_aabb(p), rotated_to_aabb(g)) if rows.size else np.zeros(0)
+    iou = np.zeros(0)
+    if rows.size and gt.rotated:
+        iou = rotated_box_iou(p, g)
+        # A circle's outline has no orientation: compare axis-aligned boxes there, or a tracker that does not
+        # measure rotation would lose overlap on a perfectly tracked disc.
+        circle = _circles(gt, frames)
+        if circle.any():
+            true_box = g[circle].copy()
+            true_box[:, 4] = 0.0  # the bounding box of a circle is its own square, axis-aligned
+            iou[circle] = box_iou(rotated_to_aabb(track.boxes(rotated=False)[rows[circle]]),
+                                  rotated_to_aabb(true_box))
+    elif rows.size:
+        iou = box_iou(rotated_to_aabb(p), rotated_to_aabb(g))
     err = centre_error(p[:, :2], g[:, :2]) if rows.size else np.zeros(0)
     curve = success_curve(iou)
     prec = precision_curve(err)

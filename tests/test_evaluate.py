@@ -172,6 +172,25 @@ def test_score_track_axis_aligned_gt_compares_ellipse_bounding_box():
     assert m["rotation_error_median_deg"] is None
 
 
+def test_score_track_circle_ground_truth_ignores_orientation_of_the_box():
+    n = 4
+    rot = np.array([0.0, 30, 45, 60])
+    circle = np.column_stack([np.full(n, 50.0), np.full(n, 40), np.full(n, 10), np.full(n, 10), rot])
+    gt = ground_truth_from_ellipses(circle, np.ones(n), rot)
+    # A box tracker (no rotation) that finds the disc exactly: full overlap on every frame.
+    still = circle.copy()
+    still[:, 4] = 0.0
+    assert score_track(gt, _ellipse_track(still, np.ones(n), np.full(n, np.nan)))["iou"] == pytest.approx([1] * n)
+    # The same for an ellipse ground truth is a rotated-box comparison: turning it 45 deg off costs overlap.
+    ell = circle.copy()
+    ell[:, 3] = 5.0
+    flat = ell.copy()
+    flat[:, 4] = 0.0
+    gt_ellipse = ground_truth_from_ellipses(ell, np.ones(n), rot)
+    iou = score_track(gt_ellipse, _ellipse_track(flat, np.ones(n), np.zeros(n)))["iou"]
+    assert iou[0] == pytest.approx(1) and iou[2] < 0.6
+
+
 def test_score_track_skips_unscored_and_missing_frames():
     boxes = np.tile([0.0, 0, 10, 10], (6, 1))
     boxes[2] = np.nan

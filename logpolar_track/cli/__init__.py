@@ -64,3 +64,4 @@ def fail(message: str, code: int = EXIT_USAGE) -> "None":
 from . import run  # noqa: E402,F401
 from . import bench  # noqa: E402,F401
 from . import samples  # noqa: E402,F401
+from . import look  # noqa: E402,F401

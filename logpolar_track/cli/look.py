@@ -1,0 +1,198 @@
+"""``lptrack frame``, ``roi``, ``plot`` and ``sheet``: look at a video before a run and at a track after it.
+
+Thin wrappers over :mod:`logpolar_track.look`. Written files' paths go to stdout (one per line), notes to
+stderr; errors are one ``lptrack: error:`` line.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ..errors import RoiError, UsageError
+from ..geometry import ROI_SYNTAX, check_roi_fits, parse_roi
+from ..look import (ROUND_TOLERANCE, find_video_for_csv, matplotlib_hint, plot_track,
+                    read_frame, read_run_csv, roi_from_box, roi_from_points, write_contact_sheet,
+                    write_frame_png)
+from . import main
+
+
+class _OneLineErrors(click.Command):
+    """A command whose argument errors are one ``lptrack: error:`` line (exit 2), not click's usage block."""
+
+    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+        try:
+            return super().parse_args(ctx, args)
+        except click.UsageError as exc:
+            raise UsageError(f"{exc.format_message()} (see 'lptrack {self.name} --help')") from None
+
+
+def _parse_roi_option(spec: str):
+    try:
+        return parse_roi(spec)
+    except RoiError as exc:
+        message = str(exc)
+        raise RoiError(message if ROI_SYNTAX in message else f"{message}; expected {ROI_SYNTAX}") from None
+
+
+def _run_stem(csv_path: Path) -> str:
+    """``clip.lptrack.csv`` -> ``clip.lptrack``: the stem default outputs of plot and sheet are named after."""
+    return csv_path.stem
+
+
+_VIDEO = click.Path(dir_okay=True, path_type=Path)
+
+
+@main.command("frame", cls=_OneLineErrors, epilog="""\b
+Examples:
+  lptrack frame clip.mp4                          # frame 0 -> clip.frame0.png
+  lptrack frame clip.mp4 --at 120 --grid 20
+  lptrack frame clip.mp4 --time 4.5 -o look.png
+  lptrack frame clip.mp4 --roi 320,240,60,30,15   # check a ROI before a run
+""")
+@click.argument("video", type=_VIDEO)
+@click.option("--at", "index", type=int, metavar="N", help="Frame index, 0 = first frame of the file. Default 0.")
+@click.option("--time", "time_s", type=float, metavar="SECONDS", help="Instead of --at: the frame at this time.")
+@click.option("-o", "--out", "out_png", type=click.Path(dir_okay=False, path_type=Path), metavar="PNG",
+              help="PNG to write. Default: <video stem>.frame<N>.png in the current folder.")
+@click.option("--grid", type=click.IntRange(min=0), default=50, show_default=True, metavar="PX",
+              help="Grid line spacing in pixels; 0 for no grid.")
+@click.option("--roi", "roi_spec", metavar="SPEC",
+              help="Draw this candidate ROI: 'cx,cy,r' or 'cx,cy,a,b,angle' (pixels; degrees CCW).")
+@click.option("--overwrite", is_flag=True, help="Replace an existing PNG.")
+def frame(video: Path, index: int | None, time_s: float | None, out_png: Path | None, grid: int,
+          roi_spec: str | None, overwrite: bool) -> None:
+    """Write one frame of VIDEO as a PNG with a labelled pixel grid.
+
+    The PNG has the frame's own size, so any image viewer's cursor position
+    reads video pixels (x right, y down, origin top-left): read off an
+    object's centre and radius for --roi. The frame is exactly the N-th
+    decoded frame (earlier frames are decoded, not skipped by seeking).
+    Prints the PNG's path on stdout.
+    """
+    if index is not None and time_s is not None:
+        raise UsageError("--at and --time contradict each other; give one of them")
+    roi = _parse_roi_option(roi_spec) if roi_spec is not None else None
+    path = write_frame_png(video, out_png, index=index, time_s=time_s, grid=grid, roi=roi, overwrite=overwrite)
+    click.echo(str(path))
+
+
+@main.command("roi", cls=_OneLineErrors, epilog=f"""\b
+3 or 4 points give the circle through them; 5 or more an ellipse (least
+squares). A result whose semi-axes differ by at most --round-tol (default
+{ROUND_TOLERANCE:g}, i.e. {ROUND_TOLERANCE:.0%}) is printed as a circle
+cx,cy,r with the radius of equal area; --round-tol 0 keeps the ellipse.
+Ellipses are printed with a >= b and the angle of axis a in (-90, 90]
+degrees counter-clockwise as seen on screen.
+
+\b
+Examples:
+  lptrack roi clip.mp4 --from-box 280,200,80,80          # -> 320,240,40
+  lptrack roi clip.mp4 --from-points 380,240,320,270,260,240,320,210,362,262
+  lptrack run clip.mp4 --roi "$(lptrack roi clip.mp4 --from-box 280,200,120,60)"
+""")
+@click.argument("video", type=_VIDEO)
+@click.option("--at", "index", type=click.IntRange(min=0), default=0, show_default=True, metavar="N",
+              help="Frame the coordinates refer to (the ROI is checked against its size).")
+@click.option("--from-box", "box", metavar="X,Y,W,H",
+              help="Axis-aligned box: top-left corner and size in pixels; gives the inscribed ellipse.")
+@click.option("--from-points", "points", metavar="X1,Y1,X2,Y2,...",
+              help="Points on the object's outline in pixels (at least 3, spread around it).")
+@click.option("--round-tol", type=click.FloatRange(min=0.0, max=1.0), default=ROUND_TOLERANCE,
+              show_default=True, metavar="FRACTION",
+              help="Print a circle when the semi-axes differ by at most this fraction.")
+def roi(video: Path, index: int, box: str | None, points: str | None, round_tol: float) -> None:
+    """Turn a box or points on an outline into a --roi spec, printed on stdout.
+
+    For objects marked in another tool. The ROI is checked as 'lptrack run'
+    checks it (centre in the frame, at least half of it inside, semi-axes
+    >= 2 px); a line on stderr shows how to draw it on the frame.
+    """
+    if (box is None) == (points is None):
+        raise UsageError("give exactly one of --from-box X,Y,W,H or --from-points X1,Y1,X2,Y2,...")
+    result = roi_from_box(box, round_tolerance=round_tol) if box is not None else \
+        roi_from_points(points, round_tolerance=round_tol)
+    shot = read_frame(video, index)
+    check_roi_fits(result, shot.width, shot.height, source=f"'{video.name}' (frame {index})")
+    spec = result.to_spec()
+    click.echo(spec)
+    click.echo(f"lptrack: check it with: lptrack frame {video} --at {index} --roi {spec}", err=True)
+
+
+@main.command("plot", cls=_OneLineErrors, epilog="""\b
+The run CSV does not name its video: the thumbnail comes from --video, or
+from <stem>.mp4 (.avi, .mov, .mkv, .m4v, .webm) when exactly one such file
+sits next to the CSV (or in the current folder), where <stem> is the CSV's
+name without .lptrack.csv (or .csv). --no-video draws the path on blank axes.
+
+\b
+Examples:
+  lptrack plot clip.lptrack.csv --video clip.mp4 -o track.png
+  lptrack plot spin.lptrack.csv --video sample_videos/spin.mp4 --gt sample_videos/spin.gt.csv
+""")
+@click.argument("run_csv", type=click.Path(dir_okay=False, path_type=Path), metavar="RUN.csv")
+@click.option("-o", "--out", "out_png", type=click.Path(dir_okay=False, path_type=Path), metavar="PNG",
+              help="PNG to write. Default: <RUN stem>.plot.png in the current folder.")
+@click.option("--gt", "gt_path", type=click.Path(dir_okay=False, path_type=Path), metavar="GT",
+              help="Ground truth to overlay and score: lptrack .gt.csv, OTB/UAV123 x,y,w,h .txt, VOT "
+                   "groundtruth.txt.")
+@click.option("--video", "video", type=_VIDEO, metavar="VIDEO", help="The tracked video, for the thumbnail.")
+@click.option("--no-video", is_flag=True, help="No thumbnail, even if the video can be found.")
+@click.option("--overwrite", is_flag=True, help="Replace an existing PNG.")
+@click.option("-q", "--quiet", is_flag=True, help="No note on stderr about which video was used.")
+def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path | None, no_video: bool,
+         overwrite: bool, quiet: bool) -> None:
+    """Draw a run CSV as a figure (PNG): path, scale, rotation, score.
+
+    The centre path over the run's first frame; scale, rotation (degrees
+    CCW, cumulative) and score against time, lost frames shaded red. With
+    --gt: ground truth overlaid and the errors per frame (centre px, scale %,
+    rotation deg). Needs matplotlib: pip install 'lptrack[plot]'.
+    Prints the PNG's path on stdout.
+    """
+    hint = matplotlib_hint()
+    if hint:
+        raise UsageError(hint)
+    if no_video and video is not None:
+        raise UsageError("--video and --no-video contradict each other; give one of them")
+    table = read_run_csv(run_csv)
+    if video is None and not no_video:
+        video = find_video_for_csv(run_csv)
+        if video is not None and not quiet:
+            click.echo(f"lptrack: thumbnail from '{video}' (give --video to choose another)", err=True)
+    out_png = out_png or Path(f"{_run_stem(run_csv)}.plot.png")
+    path = plot_track(table, out_png, video=video, ground_truth=gt_path, overwrite=overwrite)
+    click.echo(str(path))
+
+
+@main.command("sheet", cls=_OneLineErrors, epilog="""\b
+Examples:
+  lptrack sheet clip.mp4 clip.lptrack.csv                 # 4 x 3 frames
+  lptrack sheet clip.mp4 clip.lptrack.csv --count 20 --cols 5 --width 2000
+""")
+@click.argument("video", type=_VIDEO)
+@click.argument("run_csv", type=click.Path(dir_okay=False, path_type=Path), metavar="RUN.csv")
+@click.option("-o", "--out", "out_png", type=click.Path(dir_okay=False, path_type=Path), metavar="PNG",
+              help="PNG to write. Default: <RUN stem>.sheet.png in the current folder.")
+@click.option("--cols", type=click.IntRange(min=1, max=64), default=4, show_default=True, help="Columns.")
+@click.option("--rows", type=click.IntRange(min=1, max=64), default=3, show_default=True, help="Rows.")
+@click.option("--count", type=click.IntRange(min=1, max=4096), metavar="N",
+              help="Instead of --rows: N frames, in --cols columns.")
+@click.option("--width", type=click.IntRange(min=64, max=20000), default=1600, show_default=True, metavar="PX",
+              help="Sheet width in pixels (tiles are never enlarged beyond the video's size).")
+@click.option("--overwrite", is_flag=True, help="Replace an existing PNG.")
+def sheet(video: Path, run_csv: Path, out_png: Path | None, cols: int, rows: int, count: int | None, width: int,
+          overwrite: bool) -> None:
+    """Write a contact sheet: evenly spaced annotated frames of a run, one PNG.
+
+    Each tile is a frame of VIDEO with the run's outline and axis line (green
+    tracked, red lost) and a label: frame number, time, scale (x), rotation
+    (r, degrees CCW), score. First and last rows of the run are always shown.
+    Prints the PNG's path on stdout.
+    """
+    table = read_run_csv(run_csv)
+    out_png = out_png or Path(f"{_run_stem(run_csv)}.sheet.png")
+    path = write_contact_sheet(video, table, out_png, cols=cols, rows=rows, count=count, width=width,
+                               overwrite=overwrite)
+    click.echo(str(path))

@@ -227,7 +227,17 @@ def draw_grid(image: np.ndarray, spacing: int = 50, *, colour=GRID_COLOUR, capti
         for y in ys:
             if (y // spacing) % every_y == 0:
                 _label(out, str(int(y)), (0, int(y) + 2), colour)
-    _label(out, caption or f"{width}x{height} px", (width, height), colour, anchor="br")
+    size_text = f"{width}x{height} px"
+    text, scale = caption or size_text, 0.4
+    # On a small frame shrink the caption, then fall back to the size alone, rather than cut it off.
+    while cv2.getTextSize(text, _FONT, scale, 1)[0][0] + 4 > width:
+        if scale > 0.3:
+            scale = 0.3
+        elif text != size_text:
+            text, scale = size_text, 0.4
+        else:
+            break
+    _label(out, text, (width, height), colour, scale=scale, anchor="br")
     return out
 
 
@@ -701,6 +711,17 @@ def plot_track(run, out_png, *, video=None, ground_truth=None, overwrite: bool =
                      label="ground truth")
     if thumb is None:
         ax_path.invert_yaxis()
+    else:
+        # Zoom to where the object went (its outlines plus a margin), within the frame: a small path over a
+        # whole frame would be a few pixels wide.
+        margin = 1.5 * float(np.max(table.ellipses[:, 2:4]))
+        x0 = max(-0.5, float(np.min(cx)) - margin)
+        x1 = min(thumb.width - 0.5, float(np.max(cx)) + margin)
+        y0 = max(-0.5, float(np.min(cy)) - margin)
+        y1 = min(thumb.height - 0.5, float(np.max(cy)) + margin)
+        if x1 > x0 and y1 > y0:
+            ax_path.set_xlim(x0, x1)
+            ax_path.set_ylim(y1, y0)
     ax_path.set_aspect("equal", adjustable="datalim" if thumb is None else "box")
     ax_path.set(xlabel="x (px)", ylabel="y (px, down)", title="centre path")
     ax_path.legend(fontsize=8, loc="best")

@@ -1,0 +1,376 @@
+"""``lptrack frame``/``roi``/``plot``/``sheet`` and the library underneath (:mod:`logpolar_track.look`).
+
+Frames are compared pixel for pixel with a direct sequential OpenCV read of the same file; ROIs are fitted to
+points on known ellipses; plot and sheet run on a tiny ``lptrack run --tracker diffdecomp`` track.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from logpolar_track.cli import main
+from logpolar_track.errors import RoiError, UsageError
+from logpolar_track.geometry import Ellipse, parse_roi
+from logpolar_track.look import (GRID_COLOUR, PLOT_DPI, PLOT_SIZE_IN, draw_grid, find_video_for_csv,
+                                 read_frame, read_run_csv, roi_from_box, roi_from_points, sheet_geometry,
+                                 write_contact_sheet)
+from logpolar_track.results import COLUMNS
+
+
+def invoke(*args):
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+def one_error_line(result, code: int) -> str:
+    """Assert a clean failure: exit ``code``, exactly one ``lptrack: error:`` line, no traceback; return it."""
+    assert result.exit_code == code, (result.exit_code, result.stderr)
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("lptrack: error: "), result.stderr
+    assert "Traceback" not in result.stderr
+    return lines[0]
+
+
+def sequential_frames(path: Path) -> list[np.ndarray]:
+    """Every frame of ``path`` read from the start with a plain cv2.VideoCapture."""
+    cap = cv2.VideoCapture(str(path))
+    frames = []
+    while True:
+        ok, frame = cap.read()
+        if not ok:
+            break
+        frames.append(frame)
+    cap.release()
+    return frames
+
+
+def png_size(path: Path) -> tuple[int, int]:
+    image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    assert image is not None, f"{path} is not a readable PNG"
+    return image.shape[1], image.shape[0]
+
+
+def angle_diff_mod180(a: float, b: float) -> float:
+    return abs((a - b + 90.0) % 180.0 - 90.0)
+
+
+# -- frame ---------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("index", [0, 1, 7, 19])
+def test_read_frame_is_the_nth_sequentially_decoded_frame(tiny_video, index):
+    expected = sequential_frames(tiny_video.path)[index]
+    frame = read_frame(tiny_video.path, index)
+    assert frame.index == index and frame.time_s == pytest.approx(index / 30.0)
+    assert np.array_equal(frame.image, expected)
+
+
+def test_read_frame_at_a_time_rounds_to_the_nearest_frame(tiny_video):
+    frame = read_frame(tiny_video.path, time_s=0.49)  # 14.7 frames at 30 fps -> frame 15
+    assert frame.index == 15
+    assert np.array_equal(frame.image, sequential_frames(tiny_video.path)[15])
+
+
+def test_read_frame_past_the_end_gives_the_valid_range(tiny_video):
+    with pytest.raises(UsageError, match=r"frame 20 lies past the end .* 20 frames: give a frame from 0 to 19"):
+        read_frame(tiny_video.path, 20)
+
+
+def test_frame_command_writes_the_exact_frame(tiny_video, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = invoke("frame", tiny_video.path, "--at", 12, "--grid", 0)
+    assert result.exit_code == 0, result.stderr
+    out = tmp_path / "tiny.frame12.png"  # default name, in the current folder
+    assert result.stdout.strip() == str(Path("tiny.frame12.png"))
+    image = cv2.imread(str(out))
+    expected = sequential_frames(tiny_video.path)[12]
+    assert image.shape == expected.shape
+    # Only the size caption in the bottom-right corner differs (PNG is lossless).
+    assert np.array_equal(image[:96], expected[:96])
+
+
+def test_frame_command_refuses_to_overwrite_and_bad_indexes(tiny_video, tmp_path):
+    out = tmp_path / "f.png"
+    assert invoke("frame", tiny_video.path, "-o", out).exit_code == 0
+    before = out.read_bytes()
+    assert "--overwrite" in one_error_line(invoke("frame", tiny_video.path, "--at", 3, "-o", out), 1)
+    assert out.read_bytes() == before
+    assert invoke("frame", tiny_video.path, "--at", 3, "-o", out, "--overwrite").exit_code == 0
+    assert out.read_bytes() != before
+    line = one_error_line(invoke("frame", tiny_video.path, "--at", 25, "-o", tmp_path / "g.png"), 2)
+    assert "from 0 to 19" in line
+    assert not (tmp_path / "g.png").exists()
+    one_error_line(invoke("frame", tiny_video.path, "--at", 1, "--time", 0.1, "-o", tmp_path / "g.png"), 2)
+    one_error_line(invoke("frame", tmp_path / "missing.mp4", "-o", tmp_path / "g.png"), 1)
+    line = one_error_line(invoke("frame", tiny_video.path, "--roi", "500,60,20", "-o", tmp_path / "g.png"), 2)
+    assert "outside" in line
+    assert not (tmp_path / "g.png").exists()
+
+
+def test_grid_lines_and_labels_are_at_their_pixel_positions():
+    image = np.zeros((150, 230, 3), np.uint8)
+    out = draw_grid(image, 50)
+    grid = np.array(GRID_COLOUR, np.uint8)
+    # Lines exactly on x = 50, 100, 150, 200 and y = 50, 100, and nowhere else (away from the labels).
+    for x in (50, 100, 150, 200):
+        assert (out[30:125:7, x] == grid).all()
+    for y in (50, 100):
+        assert (out[y, 30:220:7] == grid).all()
+    assert not (out[75, 30:220] == grid).all(axis=1)[[c - 30 for c in range(30, 220) if c % 50]].any()
+    # Each x label sits in the top strip just right of its line, before the next one.
+    top = out[:14].astype(int).sum(axis=2) > 0
+    for x in (50, 100, 150):
+        cols = np.flatnonzero(top[:, x + 1:x + 50].any(axis=0)) + x + 1
+        assert cols.size and cols.min() <= x + 6 and cols.max() < x + 45, (x, cols)
+    # Each y label sits at the left edge just below its line.
+    left = out[:, :14].astype(int).sum(axis=2) > 0
+    for y in (50, 100):
+        rows = np.flatnonzero(left[y + 1:y + 40].any(axis=1)) + y + 1
+        assert rows.size and rows.min() <= y + 6, (y, rows)
+    # The frame size in the bottom-right corner.
+    assert (out[-14:, -60:].sum(axis=2) > 0).any()
+    assert (out[-14:, :20].sum(axis=2) == 0).all()
+    assert not image.any()  # input untouched
+
+
+def test_frame_command_grid_positions_on_a_real_frame(tiny_video, tmp_path):
+    out = tmp_path / "grid.png"
+    assert invoke("frame", tiny_video.path, "--grid", 40, "-o", out).exit_code == 0
+    image = cv2.imread(str(out))
+    assert (image[30:100, 40] == GRID_COLOUR).all() and (image[30:100, 120] == GRID_COLOUR).all()
+    assert (image[80, 30:150] == GRID_COLOUR).all()
+    assert not (image[30:100, 41] == GRID_COLOUR).all(axis=1).all()
+
+
+# -- roi -----------------------------------------------------------------------------------------------------
+
+def test_roi_from_box_round_trips():
+    e = roi_from_box("60,40,80,40")
+    assert (e.cx, e.cy, e.a, e.b, e.angle_deg) == (100, 60, 40, 20, 0)
+    tall = roi_from_box([60, 40, 40, 80])
+    assert (tall.cx, tall.cy, tall.a, tall.b, tall.angle_deg) == (80, 80, 40, 20, 90)
+    square = roi_from_box("10,20,40,40.5")  # within the 2 % tolerance: a circle of equal area
+    assert square.is_circle and square.a == pytest.approx(math.sqrt(20 * 20.25))
+    assert not roi_from_box("10,20,40,40.5", round_tolerance=0).is_circle
+    with pytest.raises(RoiError, match="x,y,w,h"):
+        roi_from_box("1,2,3")
+    with pytest.raises(RoiError, match="> 0"):
+        roi_from_box("1,2,0,3")
+
+
+@pytest.mark.parametrize("angle", [0.0, 30.0, -60.0, 75.0, 90.0, 135.0])
+def test_roi_from_points_on_a_known_ellipse(angle):
+    cx, cy, a, b = 120.0, 90.0, 45.0, 18.0
+    rng = np.random.default_rng(3)
+    t = np.sort(rng.uniform(0, 2 * np.pi, 9))
+    # Points built here, not by the code under test: (u, v) in the ellipse's frame, y-up, then y flipped.
+    psi = math.radians(angle)
+    u, v = a * np.cos(t), b * np.sin(t)
+    x = cx + u * math.cos(psi) - v * math.sin(psi)
+    y = cy - (u * math.sin(psi) + v * math.cos(psi))
+    points = np.column_stack([x, y]) + rng.normal(0, 0.2, (len(t), 2))
+    e = roi_from_points(",".join(f"{p:.2f}" for p in points.ravel()))
+    assert abs(e.cx - cx) < 1 and abs(e.cy - cy) < 1 and abs(e.a - a) < 1 and abs(e.b - b) < 1
+    assert angle_diff_mod180(e.angle_deg, angle) < 1.0
+    assert -90 < e.angle_deg <= 90
+    # Counter-clockwise on screen: axis a ends up and to the right for 0 < angle < 90 (y is down).
+    tip = (cx + a * math.cos(psi), cy - a * math.sin(psi))
+    ends = [e.axis_end(), (2 * e.cx - e.axis_end()[0], 2 * e.cy - e.axis_end()[1])]
+    assert min(math.dist(end, tip) for end in ends) < 1.5
+
+
+def test_roi_from_few_points_is_a_circle_and_too_few_is_an_error():
+    r, cx, cy = 25.0, 70.0, 50.0
+    for n in (3, 4):
+        t = np.array([0.3, 1.9, 4.0, 5.2][:n])
+        pts = np.column_stack([cx + r * np.cos(t), cy - r * np.sin(t)])
+        e = roi_from_points(pts)
+        assert e.is_circle and math.dist(e.centre, (cx, cy)) < 1e-6 and e.a == pytest.approx(r)
+    with pytest.raises(RoiError, match="at least 3 points"):
+        roi_from_points("1,2,3,4")
+    with pytest.raises(RoiError, match="pairs"):
+        roi_from_points("1,2,3,4,5")
+    with pytest.raises(RoiError, match="straight line"):
+        roi_from_points("0,0,1,1,2,2,3,3,4,4")
+
+
+def test_roi_command_prints_a_spec_checked_against_the_frame(tiny_video):
+    result = invoke("roi", tiny_video.path, "--from-box", "60,40,40,40")
+    assert result.exit_code == 0, result.stderr
+    assert result.stdout == "80,60,20\n"
+    assert "lptrack frame" in result.stderr and "--roi 80,60,20" in result.stderr
+    e = Ellipse(80, 60, 30, 12, 30)
+    pts = ",".join(f"{v:.3f}" for v in e.boundary_points(8).ravel())
+    result = invoke("roi", tiny_video.path, "--at", 5, "--from-points", pts)
+    got = parse_roi(result.stdout.strip())
+    assert math.dist(got.centre, e.centre) < 1 and abs(got.a - 30) < 1 and abs(got.b - 12) < 1
+    assert angle_diff_mod180(got.angle_deg, 30) < 1
+    assert "outside" in one_error_line(invoke("roi", tiny_video.path, "--from-box", "200,10,20,20"), 2)
+    one_error_line(invoke("roi", tiny_video.path), 2)
+    one_error_line(invoke("roi", tiny_video.path, "--from-box", "1,2,3,4", "--from-points", "1,2,3,4,5,6"), 2)
+    assert "at least 3" in one_error_line(invoke("roi", tiny_video.path, "--from-points", "1,2,3,4"), 2)
+    assert "0 to 19" in one_error_line(invoke("roi", tiny_video.path, "--at", 40, "--from-box", "60,40,40,40"), 2)
+
+
+# -- a tiny run for plot and sheet ----------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def tiny_run(_tiny_video_master, tmp_path_factory):
+    """(video, run CSV, ground-truth CSV) of `lptrack run --tracker diffdecomp` on the tiny video."""
+    folder = tmp_path_factory.mktemp("look_run")
+    video = _tiny_video_master
+    run_csv = folder / "tiny.lptrack.csv"
+    result = invoke("run", video.path, "--tracker", "diffdecomp", "--no-video", "--csv", run_csv, "--quiet")
+    assert result.exit_code == 0, result.stderr
+    gt = folder / "tiny.gt.csv"
+    with open(gt, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["frame", "cx", "cy", "a", "b", "angle_deg", "scale", "rotation_deg"])
+        for k, p in enumerate(video.poses):
+            r = video.roi.a * p.scale
+            w.writerow([k, p.cx, p.cy, r, r, p.rotation_deg, p.scale, p.rotation_deg])
+    return video, run_csv, gt
+
+
+def bad_csvs(folder: Path, good: Path) -> dict[str, Path]:
+    """Run CSVs that break the contract in different ways."""
+    lines = good.read_text().splitlines()
+    cases = {
+        "header": ["frame,x,y,r"] + [",".join(line.split(",")[:4]) for line in lines[1:]],
+        "status": lines[:2] + [lines[2].rsplit(",", 1)[0] + ",found"] + lines[3:],
+        "number": lines[:3] + [lines[3].replace(lines[3].split(",")[2], "abc", 1)] + lines[4:],
+        "empty": [],
+    }
+    paths = {}
+    for name, content in cases.items():
+        path = folder / f"bad_{name}.csv"
+        path.write_text("\n".join(content) + ("\n" if content else ""))
+        paths[name] = path
+    return paths
+
+
+def test_read_run_csv_follows_the_contract(tiny_run, tmp_path):
+    _, run_csv, _ = tiny_run
+    table = read_run_csv(run_csv)
+    assert len(table) == 20 and list(table.frames) == list(range(20))
+    assert table.status[0] == "init" and table.scale[0] == 1.0
+    assert table.result(3).state.ellipse.cx == table.ellipses[3, 0]
+    messages = {}
+    for name, path in bad_csvs(tmp_path, run_csv).items():
+        with pytest.raises(Exception) as info:
+            read_run_csv(path)
+        messages[name] = str(info.value)
+    assert ",".join(COLUMNS) in messages["header"]
+    assert "line 3" in messages["status"] and "init, tracked, lost" in messages["status"]
+    assert "line 4" in messages["number"] and "'abc' is not a number" in messages["number"]
+    assert "empty" in messages["empty"]
+
+
+def test_sheet_has_the_expected_size_and_shows_the_run(tiny_run, tmp_path):
+    video, run_csv, _ = tiny_run
+    out = tmp_path / "sheet.png"
+    result = invoke("sheet", video.path, run_csv, "-o", out)
+    assert result.exit_code == 0, result.stderr
+    assert result.stdout.strip() == str(out)
+    geometry = sheet_geometry(160, 120, 4, 12, 1600)
+    assert geometry["tile"] == (160, 120)  # tiles are never enlarged beyond the video
+    assert png_size(out) == geometry["size"] == (640, 28 + 3 * (120 + 18))
+    # --count with --cols and --width: 5 frames in 2 columns of 100 px tiles -> 3 rows.
+    out2 = tmp_path / "sheet2.png"
+    assert invoke("sheet", video.path, run_csv, "-o", out2, "--count", 5, "--cols", 2, "--width", 200).exit_code == 0
+    assert png_size(out2) == (200, 28 + 3 * (75 + 18))
+    # The first tile is frame 0 with the green outline drawn on it: its centre row crosses green pixels.
+    sheet = cv2.imread(str(out))
+    tile = sheet[28:28 + 120, :160].astype(int)
+    green = (tile[..., 1] > 180) & (tile[..., 0] < 80) & (tile[..., 2] < 80)
+    assert green[60].any()
+
+
+def test_write_contact_sheet_accepts_results(tiny_run, tmp_path):
+    video, run_csv, _ = tiny_run
+    table = read_run_csv(run_csv)
+    results = [table.result(i) for i in range(len(table))]
+    out = write_contact_sheet(video.path, results, tmp_path / "s.png", cols=3, rows=1, width=300)
+    assert png_size(out) == (300, 28 + 75 + 18)
+
+
+def test_sheet_and_plot_fail_cleanly_on_a_csv_off_contract(tiny_run, tmp_path):
+    video, run_csv, _ = tiny_run
+    for name, path in bad_csvs(tmp_path, run_csv).items():
+        out = tmp_path / f"{name}.png"
+        line = one_error_line(invoke("sheet", video.path, path, "-o", out), 1)
+        assert str(path) in line
+        assert not out.exists()
+        if "matplotlib" in sys.modules or _has_matplotlib():
+            one_error_line(invoke("plot", path, "-o", out, "--no-video"), 1)
+            assert not out.exists()
+    assert "0 to" not in one_error_line(invoke("sheet", tmp_path / "nothere.mp4", run_csv, "-o",
+                                               tmp_path / "x.png"), 1)
+    assert list(p.name for p in tmp_path.iterdir() if p.suffix == ".png") == []
+
+
+def test_sheet_of_a_run_longer_than_the_video_says_so(tiny_run, tmp_path):
+    video, run_csv, _ = tiny_run
+    lines = run_csv.read_text().splitlines()
+    extra = lines[-1].split(",")
+    extra[0] = "30"
+    longer = tmp_path / "longer.csv"
+    longer.write_text("\n".join(lines + [",".join(extra)]) + "\n")
+    assert "frame 30" in one_error_line(invoke("sheet", video.path, longer, "-o", tmp_path / "x.png"), 2)
+    assert not (tmp_path / "x.png").exists()
+
+
+def _has_matplotlib() -> bool:
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+needs_matplotlib = pytest.mark.skipif(not _has_matplotlib(), reason="matplotlib not installed (extra 'plot')")
+PLOT_SIZE = (int(PLOT_SIZE_IN[0] * PLOT_DPI), int(PLOT_SIZE_IN[1] * PLOT_DPI))
+
+
+@needs_matplotlib
+def test_plot_has_the_expected_size_with_and_without_ground_truth(tiny_run, tmp_path):
+    video, run_csv, gt = tiny_run
+    out = tmp_path / "track.png"
+    result = invoke("plot", run_csv, "-o", out, "--video", video.path)
+    assert result.exit_code == 0, result.stderr
+    assert result.stdout.strip() == str(out) and png_size(out) == PLOT_SIZE
+    out_gt = tmp_path / "track_gt.png"
+    result = invoke("plot", run_csv, "-o", out_gt, "--gt", gt, "--no-video")
+    assert result.exit_code == 0, result.stderr
+    assert png_size(out_gt) == PLOT_SIZE
+    assert "--overwrite" in one_error_line(invoke("plot", run_csv, "-o", out, "--no-video"), 1)
+
+
+@needs_matplotlib
+def test_plot_finds_the_video_next_to_a_default_named_csv(tiny_run, tmp_path, monkeypatch):
+    video, run_csv, _ = tiny_run
+    folder = tmp_path / "here"
+    folder.mkdir()
+    (folder / "tiny.mp4").write_bytes(video.path.read_bytes())
+    (folder / "tiny.lptrack.csv").write_text(run_csv.read_text())
+    assert find_video_for_csv(folder / "tiny.lptrack.csv") == folder / "tiny.mp4"
+    assert find_video_for_csv(run_csv, folders=()) is None  # no tiny.mp4 beside it
+    monkeypatch.chdir(folder)
+    result = invoke("plot", "tiny.lptrack.csv")
+    assert result.exit_code == 0, result.stderr
+    assert "thumbnail from" in result.stderr and "tiny.mp4" in result.stderr
+    assert png_size(folder / "tiny.lptrack.plot.png") == PLOT_SIZE
+
+
+def test_plot_without_matplotlib_gives_the_install_hint(tiny_run, tmp_path, monkeypatch):
+    _, run_csv, _ = tiny_run
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # makes `import matplotlib` raise ImportError
+    line = one_error_line(invoke("plot", run_csv, "-o", tmp_path / "p.png"), 2)
+    assert "pip install 'lptrack[plot]'" in line
+    assert not (tmp_path / "p.png").exists()

@@ -37,8 +37,7 @@ import numpy as np
 
 from .draw import LOST_COLOUR, TRACKED_COLOUR, draw_state
 from .errors import OutputError, RoiError, UsageError, VideoError
-from .evaluate import GroundTruth, GroundTruthError, Track, read_ground_truth, rotation_errors, scale_errors, \
-    score_track
+from .evaluate import GroundTruthError, Track, read_ground_truth, rotation_errors, scale_errors, score_track
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
 from .results import COLUMNS, STATUSES, FrameResult
 from .trackers.base import TrackState

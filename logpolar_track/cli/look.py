@@ -89,7 +89,7 @@ degrees counter-clockwise as seen on screen.
 \b
 Examples:
   lptrack roi clip.mp4 --from-box 280,200,80,80          # -> 320,240,40
-  lptrack roi clip.mp4 --from-points 380,240,320,270,260,240,320,210,362,262
+  lptrack roi clip.mp4 --from-points 380,240,320,270,260,240,320,210,362,261
   lptrack run clip.mp4 --roi "$(lptrack roi clip.mp4 --from-box 280,200,120,60)"
 """)
 @click.argument("video", type=_VIDEO)

@@ -730,7 +730,7 @@ def plot_track(run, out_png, *, video=None, ground_truth=None, overwrite: bool =
     if np.isfinite(table.rotation_deg).any():
         ax_rot.plot(t, table.rotation_deg, color="tab:purple", lw=1.2, label="track")
     else:
-        ax_rot.text(0.5, 0.5, "tracker does not measure rotation", ha="center", va="center",
+        ax_rot.text(0.99, 0.05, "tracker does not measure rotation", ha="right", va="bottom",
                     transform=ax_rot.transAxes, fontsize=9, color="grey")
     ax_rot.set_ylabel("rotation (deg CCW)")
     ax_score.plot(t, table.score, color="tab:orange", lw=1.2)
@@ -757,9 +757,11 @@ def plot_track(run, out_png, *, video=None, ground_truth=None, overwrite: bool =
             ps = table.scale[rows] / table.scale[rows[0]]
             ax_errors.plot(ts, scale_errors(ps, gt.scale[frames] / gt.scale[frames[0]]), color="tab:blue",
                            lw=1.2, label="scale (%)")
-            if gt.rotation_deg is not None and gt.rotation_period and np.isfinite(table.rotation_deg[rows]).any():
-                gr = gt.rotation_deg[frames] - gt.rotation_deg[frames[0]] + table.rotation_deg[rows[0]]
+            if gt.rotation_deg is not None and gt.rotation_period:
+                start = table.rotation_deg[rows[0]]
+                gr = gt.rotation_deg[frames] - gt.rotation_deg[frames[0]] + (start if math.isfinite(start) else 0.0)
                 ax_rot.plot(ts, gr, "--", color="black", lw=1, label="ground truth")
+            if gt.rotation_deg is not None and gt.rotation_period and np.isfinite(table.rotation_deg[rows]).any():
                 pr = table.rotation_deg[rows]
                 ax_errors.plot(ts, rotation_errors(pr - pr[0], gr - gr[0], gt.rotation_period),
                                color="tab:purple", lw=1.2, label="rotation (deg)")

@@ -1,7 +1,8 @@
-"""The experimental tracker ``lpcf``: its conventions and confidence on synthetic cases.
+"""The default tracker ``lpcf``: its conventions and confidence on synthetic cases.
 
 It is not held to the thesis trackers' accuracy bounds (tests/test_trackers.py): on their fast zoom-and-turn
-sequence it still drifts off, which is why it is not the default.
+sequence (6 % and 7 degrees per frame, sustained) it still drifts off. It is the default because it is the
+most accurate tracker measured on sample_videos/ and on the real benchmark sequences.
 
 Conventions: centre in pixels, scale relative to frame 0, rotation in degrees counter-clockwise on screen.
 """
@@ -14,7 +15,7 @@ import pytest
 
 from logpolar_track.geometry import Ellipse
 from logpolar_track.synthetic import Pose, random_texture, render_frame, synthetic_sequence
-from logpolar_track.trackers import DEFAULT_TRACKER, create_tracker, tracker_class
+from logpolar_track.trackers import DEFAULT_TRACKER, create_tracker
 
 
 def run(frames, roi, **params):
@@ -27,8 +28,8 @@ def centre_errors(results, poses):
     return np.array([math.hypot(s.centre[0] - p.cx, s.centre[1] - p.cy) for (_, s), p in zip(results, poses)])
 
 
-def test_is_experimental_not_default():
-    assert DEFAULT_TRACKER != "lpcf" and tracker_class("lpcf").experimental
+def test_is_the_default():
+    assert DEFAULT_TRACKER == "lpcf"
 
 
 def test_counter_clockwise_turn_is_positive():

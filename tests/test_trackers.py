@@ -25,9 +25,9 @@ def _is_peer(name):
 
 #: Every registered tracker of lptrack's own held to the same bounds (new ones are covered automatically);
 #: `spatial` is bounded by its grid and has its own test.
-#: Experimental trackers state their own, weaker bounds in their own tests (e.g. tests/test_lpcf.py).
+#: Trackers marked ``meets_thesis_bounds = False`` are tested in their own files (e.g. tests/test_lpcf.py).
 ACCURATE = sorted(set(THESIS) | {n for n in tracker_names() if not _is_peer(n) and n != "spatial"
-                                 and not getattr(tracker_class(n), "experimental", False)},
+                                 and getattr(tracker_class(n), "meets_thesis_bounds", True)},
                   key=lambda n: (n not in THESIS, n))
 
 SHAPES = {"circle": Ellipse.circle(160, 110, 35), "ellipse": Ellipse(160, 110, 40, 26, 30)}

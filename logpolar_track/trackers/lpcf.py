@@ -1,4 +1,4 @@
-"""``lpcf`` (experimental): a correlation filter for the centre, log-polar phase correlation for
+"""``lpcf``, the default tracker: a correlation filter for the centre, log-polar phase correlation for
 scale and rotation, each run in the frame of the other's estimate.
 
 Per frame:
@@ -43,7 +43,7 @@ from .base import Similarity, SimilarityTracker, register
 
 @register
 class LogPolarCorrelationTracker(SimilarityTracker):
-    """Experimental tracker: correlation filter for translation + log-polar phase correlation for scale/rotation.
+    """Default tracker: correlation filter for translation + log-polar phase correlation for scale/rotation.
 
     Parameters
     ----------
@@ -70,10 +70,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
     """
 
     name = "lpcf"
-    #: Not yet the default: it leads on real footage but misses the synthetic bounds the thesis trackers meet
-    #: (see tests/test_lpcf.py).
-    experimental = True
-    summary = ("experimental: correlation filter for the centre in the object's frame + log-polar phase "
+    #: Not held to the thesis trackers' synthetic bounds: it loses a 6 %-per-frame zoom (tests/test_lpcf.py).
+    meets_thesis_bounds = False
+    summary = ("default: correlation filter for the centre in the object's frame + log-polar phase "
                "correlation for scale/rotation; motion prediction, confident-only learning, re-detection")
 
     def __init__(self, *, padding: float = 1.0, patch_samples: int = 64, learning_rate: float = 0.02,

@@ -37,7 +37,7 @@ import numpy as np
 
 from ..features import patch_features
 from ..geometry import Ellipse
-from ..logpolar import LogPolarGrid, PhaseCorrelator, find_peaks
+from ..logpolar import LogPolarGrid, PhaseCorrelator, find_peaks, rfft2_float32
 from .base import Similarity, SimilarityTracker, register
 
 
@@ -123,6 +123,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
                                ).astype(np.float32)
 
         self.fill = float(gray.mean())
+        self._blur_cache = None
         self.frame_size = gray.shape[1], gray.shape[0]
         first = Similarity(roi.cx, roi.cy, 1.0, 0.0, 1.0)
         spec = self._feature_spectrum(gray, first)
@@ -130,6 +131,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.denominator = (spec * np.conj(spec)).real.sum(axis=0)
         self.lp_model = self._log_polar(gray, first)
         self.lp_anchor = self.lp_model.copy()
+        self._lp_references()
         self.velocity = np.zeros(2)  # pixels per frame
         self.match_level = 1.0  # the first frame matches itself perfectly
         self.cursor = first
@@ -216,9 +218,11 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         current = self.correlator.spectrum(self._log_polar(gray, state)[None])
         # Against the learnt model (follows appearance) and the first frame's image (cannot drift): a model
         # learnt at slightly wrong scales would otherwise make the error self-consistent.
-        references = self.correlator.spectrum(np.stack([self.lp_model, self.lp_anchor]))
-        surfaces = self.correlator.correlate(references, current)
-        surface = (1 - self.anchor_weight) * surfaces[0] + self.anchor_weight * surfaces[1]
+        if self.anchor_weight == 0.0:  # the anchor's surface would be multiplied by 0: skip it
+            surface = self.correlator.correlate(self._reference_specs[:1], current)[0]
+        else:
+            surfaces = self.correlator.correlate(self._reference_specs, current)
+            surface = (1 - self.anchor_weight) * surfaces[0] + self.anchor_weight * surfaces[1]
         # A motion prior: per frame, objects change size and angle a little; a distant peak is more likely a
         # deformation or the background than a real jump.
         peak = find_peaks(surface * self.lp_prior)
@@ -240,6 +244,11 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         if lp_height >= self.lp_min_height:
             self.lp_model = (1 - self.lp_learning_rate) * self.lp_model + self.lp_learning_rate * self._log_polar(
                 gray, state)
+            self._lp_references()
+
+    def _lp_references(self) -> None:
+        """Spectra of the log-polar model and anchor, computed once per change rather than once per use."""
+        self._reference_specs = self.correlator.spectrum(np.stack([self.lp_model, self.lp_anchor]))
 
     # -- sampling ------------------------------------------------------------------------------------------
     def _patch(self, gray, state: Similarity) -> np.ndarray:
@@ -247,31 +256,63 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         nx, ny = self.size
         k = self.step * state.scale
         t = math.radians(state.rotation_deg)
-        c, s = k * math.cos(t), k * math.sin(t)
+        cos_t, sin_t = math.cos(t), math.sin(t)
+        c, s = k * cos_t, k * sin_t
         # Sample (p, q) -> pixel centre + R(rotation) * k * (p - nx/2, q - ny/2), R counter-clockwise on screen.
         px, py = nx / 2.0, ny / 2.0
         matrix = np.array([[c, s, state.cx - c * px - s * py],
                            [-s, c, state.cy + s * px - c * py]], dtype=np.float64)
         flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
         if k > 1.5:  # shrinking: average first so the patch does not alias -- only the part the patch covers
-            reach = int(math.ceil(0.5 * math.hypot(nx, ny) * k + 3 * k))
-            x0, y0 = max(int(state.cx) - reach, 0), max(int(state.cy) - reach, 0)
-            x1, y1 = min(int(state.cx) + reach + 1, gray.shape[1]), min(int(state.cy) + reach + 1, gray.shape[0])
-            if x1 - x0 < 2 or y1 - y0 < 2:
+            # The samples lie within (reach_x, reach_y) of the centre; bilinear sampling reads one pixel further
+            # and the blur's kernel (4 sigma = 2k) two k further, so the crop's own edges never show.
+            margin = 2 * k + 3
+            reach_x = k * (px * abs(cos_t) + py * abs(sin_t)) + margin
+            reach_y = k * (px * abs(sin_t) + py * abs(cos_t)) + margin
+            blurred = self._blurred(gray, 0.5 * k, state.cx - reach_x, state.cy - reach_y,
+                                    state.cx + reach_x, state.cy + reach_y)
+            if blurred is None:
                 return np.full((ny, nx), self.fill, np.float32)
-            gray = cv2.GaussianBlur(gray[y0:y1, x0:x1], (0, 0), 0.5 * k)
+            gray, x0, y0 = blurred
             matrix[:, 2] -= (x0, y0)
         # Outside the frame is a constant, not replicated edges: streaks would look like structure to the filter.
         return cv2.warpAffine(gray, matrix, (nx, ny), flags=flags, borderMode=cv2.BORDER_CONSTANT,
                               borderValue=self.fill)
 
+    def _blurred(self, gray, sigma: float, left: float, top: float, right: float, bottom: float):
+        """``gray`` blurred by ``sigma`` px over at least ``[left, right] x [top, bottom]`` (clipped to the
+        frame), with the crop's top-left pixel ``(x0, y0)``; None when the region misses the frame.
+
+        One frame is sampled several times at the same scale (the learning step samples where the last
+        correlation left the object), so the last blurred crop is kept and reused when it covers the region:
+        away from its edges a crop's blur equals the whole frame's, so reuse does not change the samples.
+        """
+        height, width = gray.shape
+        x0, y0 = max(int(math.floor(left)), 0), max(int(math.floor(top)), 0)
+        x1, y1 = min(int(math.ceil(right)) + 1, width), min(int(math.ceil(bottom)) + 1, height)
+        if x1 - x0 < 2 or y1 - y0 < 2:
+            return None
+        cache = self._blur_cache
+        if (cache is not None and cache[0] is gray and cache[1] == sigma and cache[2] <= x0 and cache[3] <= y0
+                and x1 <= cache[4] and y1 <= cache[5]):
+            return cache[6], cache[2], cache[3]
+        # A little slack, so that a centre that moves by a few pixels stays covered.
+        x0, y0 = max(x0 - _SLACK_PX, 0), max(y0 - _SLACK_PX, 0)
+        x1, y1 = min(x1 + _SLACK_PX, width), min(y1 + _SLACK_PX, height)
+        blurred = cv2.GaussianBlur(gray[y0:y1, x0:x1], (0, 0), sigma)
+        self._blur_cache = (gray, sigma, x0, y0, x1, y1, blurred)
+        return blurred, x0, y0
+
     def _feature_spectrum(self, gray, state: Similarity) -> np.ndarray:
-        features = patch_features(self._patch(gray, state)) * self.window
-        return np.fft.rfft2(features).astype(np.complex64)
+        return rfft2_float32(patch_features(self._patch(gray, state), window=self.window))
 
     def _log_polar(self, gray, state: Similarity) -> np.ndarray:
         angle = self.roi.angle_deg + state.rotation_deg
         return self.grid.sample(gray, np.array([[state.cx, state.cy]]), state.scale, angle)[0]
+
+
+#: Extra pixels around a blurred crop, so that the learning step's patch can reuse it (see ``_blurred``).
+_SLACK_PX = 4
 
 
 def _signed_bins(n: int) -> np.ndarray:
@@ -299,11 +340,18 @@ def _peak_and_psr(response: np.ndarray, exclude: int = 5) -> tuple[float, float,
     dc = _log_parabola(response[r, (c - 1) % nx], peak, response[r, (c + 1) % nx])
     dy = (r + dr + ny / 2) % ny - ny / 2
     dx = (c + dc + nx / 2) % nx - nx / 2
-    rolled = np.roll(response, (exclude - r, exclude - c), axis=(0, 1))
-    sidelobe = rolled.copy()
-    sidelobe[: 2 * exclude + 1, : 2 * exclude + 1] = np.nan
-    mean, std = np.nanmean(sidelobe), np.nanstd(sidelobe)
-    return dy, dx, peak, (peak - mean) / (std + 1e-9)
+    # Mean and spread of the response outside the (2 exclude + 1)^2 block around the peak (wrapping around),
+    # from sums over the whole response minus the block's, in float64.
+    offsets = np.arange(-exclude, exclude + 1)
+    if 2 * exclude + 1 > min(ny, nx):
+        return dy, dx, peak, float("nan")
+    values = response.astype(np.float64)
+    block = values[np.ix_((r + offsets) % ny, (c + offsets) % nx)]
+    count = values.size - block.size
+    flat = values.ravel()
+    mean = (flat.sum() - block.sum()) / count
+    var = max((flat @ flat - np.vdot(block, block)) / count - mean * mean, 0.0)
+    return dy, dx, peak, (peak - mean) / (math.sqrt(var) + 1e-9)
 
 
 def _log_parabola(left: float, centre: float, right: float) -> float:

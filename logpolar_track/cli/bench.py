@@ -69,15 +69,29 @@ Examples:
               help="Save success and precision plots (needs matplotlib: pip install 'lptrack[plot]').")
 @click.option("--jobs", type=click.IntRange(min=1), default=1, show_default=True, metavar="N",
               help="Run (sequence, tracker) pairs in N processes. Speeds are only comparable at equal N.")
+@click.option("--speed", is_flag=True,
+              help="Time the trackers instead (thesis Table 4.1 on a 640x480 synthetic video, one core) with "
+                   "decode and 'lptrack run' baselines; uses --trackers, --json and --quiet only. "
+                   "LPTRACK_SPEED_FRAMES sets the frames per sequence (default 100).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no notes on stderr.")
 def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None, per_frame: bool,
-          plot_out: Path | None, jobs: int, quiet: bool) -> None:
+          plot_out: Path | None, jobs: int, quiet: bool, speed: bool) -> None:
     """Run trackers over sequences with ground truth and compare them.
 
     Prints one row per sequence and tracker and a mean row per tracker:
     success rate, IoU success AUC, precision at 20 px, median centre, scale
     and rotation errors, and tracker frames/s.
+
+    With --speed: each tracker's ms/frame on circle and ellipse next to the
+    thesis' Table 4.1, decode and decode + encode baselines, and 'lptrack run'
+    with and without video output as a share of them.
     """
+    if speed:
+        if datasets or per_frame or plot_out is not None:
+            raise UsageError("--speed times trackers on a synthetic video; it takes no --dataset, --per-frame "
+                             "or --plot")
+        _speed(trackers, json_out, quiet)
+        return
     if plot_out is not None:
         hint = matplotlib_missing()
         if hint:
@@ -135,6 +149,36 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
         click.echo(f"lptrack: error: {r['tracker']} failed on {r['sequence']}: {r['error']}", err=True)
     if failed:
         sys.exit(EXIT_FAILURE)
+
+
+def _speed(trackers: str | None, json_out: str | None, quiet: bool) -> None:
+    """``lptrack bench --speed``: the Table 4.1 reproduction (see :mod:`logpolar_track.speed`)."""
+    from ..speed import format_report, frames_from_environment, speed_report
+
+    try:
+        n_frames = frames_from_environment()
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    names, skipped = resolve_trackers(trackers)
+    if not quiet:
+        for name, reason in skipped:
+            click.echo(f"lptrack: note: skipping {name}: {reason}", err=True)
+    if not names:
+        raise UsageError("none of the requested trackers can run here")
+    show = not quiet and sys.stderr.isatty()
+    doc = speed_report(names, n_frames=n_frames,
+                       on_step=(lambda label: click.echo(f"lptrack: timing {label}", err=True)) if show else None)
+    doc["skipped_trackers"] = [{"tracker": n, "reason": why} for n, why in skipped]
+    table = format_report(doc)
+    if json_out is not None:
+        text = json.dumps(doc, indent=1) + "\n"
+        if json_out == "-":
+            click.echo(table, err=True, nl=False)
+            sys.stdout.write(text)
+            sys.stdout.flush()
+            return
+        write_text_atomic(json_out, text)
+    click.echo(table, nl=False)
 
 
 @main.command("eval", cls=_OneLineErrors)

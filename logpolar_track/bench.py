@@ -12,11 +12,9 @@ overall plots); the summary frames/s is total updated frames over total update t
 from __future__ import annotations
 
 import math
-import multiprocessing
 import os
 import platform
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Callable, Iterable, Mapping
 
@@ -27,6 +25,7 @@ from .datasets import Sequence, discover
 from .errors import OutputError, UsageError
 from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
                        auc, score_track)
+from .executor import run_tasks
 from .trackers import create_tracker, tracker_class, tracker_names
 from .trackers import opencv as _opencv_peers  # noqa: F401  (registers cv-mil, cv-kcf, cv-csrt)
 
@@ -161,38 +160,45 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
     return result
 
 
+def _run_pair(pair: tuple, report=None) -> dict:
+    """:func:`run_one` as an :mod:`~logpolar_track.executor` task: ``pair`` is (sequence, tracker, params)."""
+    return run_one(*pair)
+
+
 def run_bench(sequences: list[Sequence], trackers: list[str], *, params: Mapping | None = None, jobs: int = 1,
-              on_result: Callable[[dict], None] | None = None) -> list[dict]:
+              scheduler=None, on_result: Callable[[dict], None] | None = None) -> list[dict]:
     """Run every tracker on every sequence; results in (sequence, tracker) order whatever ``jobs`` is.
 
     Parameters
     ----------
     jobs : int
-        Worker processes (``concurrent.futures.ProcessPoolExecutor``, a fresh process per pair); 1 runs in this
+        Worker processes, a fresh one per pair (:func:`~logpolar_track.executor.run_tasks`); 1 runs in this
         process. Several jobs share the CPU, so frames/s figures are only comparable between runs with the
         same ``jobs``. OpenCV's MIL gives repeatable results only per fresh process (jobs >= 2): run in one
         process one after another, its numbers vary slightly with what ran before.
+    scheduler : str or dask.distributed.Client, optional
+        Run the pairs on this Dask cluster instead (the sequences must be at the same paths on its workers).
     on_result : callable, optional
         Called with each result as it completes (progress display).
     """
-    pairs = [(s, t) for s in sequences for t in trackers]
-    if jobs <= 1 or len(pairs) <= 1:
-        results = []
-        for s, t in pairs:
-            results.append(run_one(s, t, params))
-            if on_result:
-                on_result(results[-1])
-        return results
-    # One fresh process per pair: OpenCV's MIL draws from a generator inside OpenCV that Python cannot reseed,
-    # so its result depends on what ran before in the same process; a fresh worker makes every pair repeatable
-    # whatever the order. "spawn" because max_tasks_per_child rules out "fork".
-    ctx = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=min(jobs, len(pairs)), mp_context=ctx, max_tasks_per_child=1) as pool:
-        futures = [pool.submit(run_one, s, t, params) for s, t in pairs]
-        for future in as_completed(futures):
-            if on_result:
-                on_result(future.result())
-        return [f.result() for f in futures]
+    pairs = [(s, t, params) for s in sequences for t in trackers]
+    results: list[dict | None] = [None] * len(pairs)
+    for outcome in run_tasks(_run_pair, pairs, jobs=jobs, scheduler=scheduler):
+        sequence, tracker, _ = pairs[outcome.index]
+        # run_one reports its own failures; a worker that died reports here, as a failed pair without frames.
+        result = outcome.value if outcome.ok else _failed_pair(sequence, tracker, outcome.error)
+        results[outcome.index] = result
+        if on_result:
+            on_result(result)
+    return results
+
+
+def _failed_pair(sequence: Sequence, tracker: str, error: str) -> dict:
+    result = {"sequence": sequence.name, "tracker": tracker, "frames": 0, "updates": 0, "lost_frames": 0,
+              "update_time_s": 0.0, "fps": math.nan, "error": error}
+    result.update(score_track(sequence.gt, Track(np.zeros(0, int), np.zeros((0, 5)), np.zeros(0), np.zeros(0),
+                                                 np.zeros(0))))
+    return result
 
 
 def _mean(values) -> float | None:

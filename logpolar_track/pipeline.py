@@ -180,6 +180,9 @@ class RunSummary:
         Codec of ``video_out``.
     csv_out : str or None
         CSV path, ``'-'`` for stdout, or None.
+    expected_frames : int
+        Frames from the start frame to the end as the container announces them (0 when it does not say).
+        Fewer ``frames`` than this means the video ended early (truncated file).
     """
 
     video: Path
@@ -196,6 +199,12 @@ class RunSummary:
     video_out: Path | None
     fourcc: str | None
     csv_out: str | None
+    expected_frames: int = 0
+
+    @property
+    def truncated(self) -> bool:
+        """The video delivered fewer frames than its container announces (e.g. a file cut short)."""
+        return 0 < self.frames < self.expected_frames
 
 
 def _no_op() -> None:
@@ -239,7 +248,7 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
 
 def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRACKER, start_frame: int = 0,
               video_out=None, csv_out=None, overwrite: bool = False, progress: ProgressLike = False,
-              tracker_params: dict | None = None) -> RunSummary:
+              tracker_params: dict | None = None, csv_options: dict | None = None) -> RunSummary:
     """Track one object through ``path`` and write the annotated video and/or the per-frame CSV.
 
     Parameters
@@ -255,6 +264,9 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
     progress : bool or callable
         True: a tqdm bar on stderr. A callable is called as ``progress(frames_done, total)`` after each
         frame (``total`` is the container's estimate of the remaining frames, or None).
+    csv_options : dict, optional
+        Further keyword arguments of :class:`~logpolar_track.results.CsvWriter` (``data_format``, ``video``,
+        ``header``, ``stream``), e.g. JSON lines, or a labelled stream for batches.
 
     Returns
     -------
@@ -283,7 +295,7 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
         frames = lost = 0
         try:
             if csv_out is not None:
-                csv_writer = CsvWriter(csv_out, overwrite=overwrite)
+                csv_writer = CsvWriter(csv_out, overwrite=overwrite, **(csv_options or {}))
             if video_out is not None:
                 video_writer = VideoWriter(video_out, reader.fps, overwrite=overwrite)
             step, finish = _progress_callback(progress, total)
@@ -315,4 +327,4 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
         processing_fps=frames / seconds if seconds > 0 else float("inf"), seconds=seconds,
         video_fps=reader.fps, video_fps_guessed=reader.fps_guessed, width=reader.width, height=reader.height,
         video_out=written, fourcc=video_writer.fourcc if video_writer is not None else None,
-        csv_out=None if csv_writer is None else csv_writer.target)
+        csv_out=None if csv_writer is None else csv_writer.target, expected_frames=total or 0)

@@ -19,10 +19,17 @@ status         ``init`` (first row), ``tracked`` or ``lost`` (not found: the geo
 
 Numbers have fixed decimals (coordinates and angles 3, scale 5, score 4, time 6), so the same run always
 writes the same bytes.
+
+Batches (several videos in one stream) prepend a ``video`` column (:data:`VIDEO_COLUMN`). The same rows can be
+written as JSON lines (:data:`FORMATS`): one object per frame with the same keys, numbers as JSON numbers and
+empty fields as ``null``.
 """
 
 from __future__ import annotations
 
+import csv
+import io
+import json
 import math
 import os
 import sys
@@ -38,6 +45,12 @@ from .video import check_output_path, temporary_path
 #: The run CSV's columns, in order. A contract: never reorder or rename; only append.
 COLUMNS: tuple[str, ...] = ("frame", "time_s", "cx", "cy", "a", "b", "angle_deg", "scale", "rotation_deg",
                             "score", "status")
+
+#: Leading column added when several videos share one stream.
+VIDEO_COLUMN = "video"
+
+#: Data formats :class:`CsvWriter` writes, and the file extension of each.
+FORMATS: dict[str, str] = {"csv": ".csv", "jsonl": ".jsonl"}
 
 #: The values of the ``status`` column.
 STATUSES: tuple[str, ...] = ("init", "tracked", "lost")
@@ -106,14 +119,37 @@ def format_row(result: FrameResult, *, initial_angle_deg: float | None = None) -
             _number(state.scale, 5), _number(state.rotation_deg, 3), _number(state.score, 4), result.status]
 
 
-def header_line() -> str:
-    """The CSV header line, newline included."""
-    return ",".join(COLUMNS) + "\n"
+def header_line(*, video: bool = False) -> str:
+    """The CSV header line, newline included; with a leading ``video`` column if ``video``."""
+    return ",".join(((VIDEO_COLUMN,) if video else ()) + COLUMNS) + "\n"
 
 
-def format_line(result: FrameResult, *, initial_angle_deg: float | None = None) -> str:
-    """One CSV line for ``result``, newline included."""
-    return ",".join(format_row(result, initial_angle_deg=initial_angle_deg)) + "\n"
+def _csv_field(text: str) -> str:
+    """``text`` as one CSV field (quoted only when it holds a comma, quote or line break)."""
+    buffer = io.StringIO()
+    csv.writer(buffer, lineterminator="").writerow([text])
+    return buffer.getvalue()
+
+
+def _json_value(column: str, text: str):
+    if text == "":
+        return None
+    if column == "frame":
+        return int(text)
+    if column in ("status", VIDEO_COLUMN):
+        return text
+    return float(text)
+
+
+def json_line(fields: list[str], *, video: str | None = None) -> str:
+    """One JSON line (newline included) from a row's fields in :data:`COLUMNS` order.
+
+    Keys are the column names (``video`` first when given); numbers keep the CSV's decimals; empty fields
+    become ``null``.
+    """
+    record = {} if video is None else {VIDEO_COLUMN: video}
+    record.update((c, _json_value(c, f)) for c, f in zip(COLUMNS, fields))
+    return json.dumps(record, separators=(",", ":")) + "\n"
 
 
 class CsvWriter:
@@ -127,6 +163,13 @@ class CsvWriter:
         Replace an existing file; otherwise an existing file raises :class:`OutputError`.
     stream : text stream, optional
         Where ``'-'`` writes (default: ``sys.stdout`` at construction time).
+    data_format : {'csv', 'jsonl'}
+        CSV (default), or JSON lines (:func:`json_line`; no header).
+    video : str, optional
+        Label written in a leading ``video`` column (key, in JSON lines) of every row, for streams that hold
+        several videos.
+    header : bool
+        Write the CSV header line (default). A batch writing several videos into one stream writes it once.
 
     Raises
     ------
@@ -141,7 +184,13 @@ class CsvWriter:
     first row's angle (see :func:`format_row`).
     """
 
-    def __init__(self, target, *, overwrite: bool = False, stream: IO[str] | None = None):
+    def __init__(self, target, *, overwrite: bool = False, stream: IO[str] | None = None,
+                 data_format: str = "csv", video: str | None = None, header: bool = True):
+        if data_format not in FORMATS:
+            raise ValueError(f"data_format must be one of {tuple(FORMATS)}, got {data_format!r}")
+        self.data_format = data_format
+        self.video = video
+        self._prefix = "" if video is None else _csv_field(video) + ","
         self.to_stdout = str(target) == "-"
         self.path: Path | None = None
         self._temp: Path | None = None
@@ -157,7 +206,8 @@ class CsvWriter:
                 self._file = open(self._temp, "w", encoding="utf-8", newline="")
             except OSError as exc:
                 raise OutputError(f"cannot write output CSV '{self.path}': {exc.strerror or exc}") from None
-        self._emit(header_line())
+        if header and data_format == "csv":
+            self._emit(header_line(video=video is not None))
 
     @property
     def target(self) -> str:
@@ -189,7 +239,11 @@ class CsvWriter:
             raise RuntimeError("CsvWriter is closed")
         if self.rows == 0:
             self._initial_angle = result.state.ellipse.angle_deg
-        self._emit(format_line(result, initial_angle_deg=self._initial_angle))
+        fields = format_row(result, initial_angle_deg=self._initial_angle)
+        if self.data_format == "jsonl":
+            self._emit(json_line(fields, video=self.video))
+        else:
+            self._emit(self._prefix + ",".join(fields) + "\n")
         self.rows += 1
 
     def close(self) -> None:

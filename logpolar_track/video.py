@@ -226,12 +226,13 @@ def _fourcc_text(code: str) -> int:
     return cv2.VideoWriter_fourcc(*code)
 
 
-def temporary_path(path: Path) -> Path:
+def temporary_path(path: Path, *, pid: int | None = None) -> Path:
     """A hidden temporary name next to ``path`` that keeps its extension last (so OpenCV picks the container).
 
-    ``out/run.mp4`` -> ``out/.run.<pid>.part.mp4``. The process id keeps concurrent runs apart.
+    ``out/run.mp4`` -> ``out/.run.<pid>.part.mp4``. The process id (this process's unless ``pid`` is given)
+    keeps concurrent runs apart, and lets a parent find what a killed worker left.
     """
-    return path.with_name(f".{path.stem}.{os.getpid()}.part{path.suffix}")
+    return path.with_name(f".{path.stem}.{os.getpid() if pid is None else pid}.part{path.suffix}")
 
 
 def check_output_path(path, *, overwrite: bool = False, what: str = "output") -> Path:

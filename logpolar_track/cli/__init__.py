@@ -13,12 +13,11 @@ import os
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
 
-import sys  # noqa: E402
-
 import click  # noqa: E402
 
 from .. import __version__  # noqa: E402
-from ..errors import LptrackError  # noqa: E402
+from ..errors import LptrackError, RoiError, UsageError  # noqa: E402
+from ..geometry import ROI_SYNTAX, Ellipse, parse_roi  # noqa: E402
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -53,10 +52,23 @@ def main() -> None:
     """
 
 
-def fail(message: str, code: int = EXIT_USAGE) -> "None":
-    """Print one ``lptrack: error:`` line on stderr and exit with ``code``."""
-    click.echo(f"lptrack: error: {message}", err=True)
-    sys.exit(code)
+class OneLineErrors(click.Command):
+    """A command whose argument errors are one ``lptrack: error:`` line (exit 2), not click's usage block."""
+
+    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+        try:
+            return super().parse_args(ctx, args)
+        except click.UsageError as exc:
+            raise UsageError(f"{exc.format_message()} (see 'lptrack {self.name} --help')") from None
+
+
+def parse_roi_option(spec: str) -> Ellipse:
+    """``--roi`` text as an :class:`Ellipse`; a malformed one raises a RoiError that shows the syntax."""
+    try:
+        return parse_roi(spec)
+    except RoiError as exc:
+        message = str(exc)
+        raise RoiError(message if ROI_SYNTAX in message else f"{message}; expected {ROI_SYNTAX}") from None
 
 
 # Sub-commands register themselves on `main` when imported; one import line per command module.

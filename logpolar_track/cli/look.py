@@ -10,30 +10,12 @@ from pathlib import Path
 
 import click
 
-from ..errors import RoiError, UsageError
-from ..geometry import ROI_SYNTAX, check_roi_fits, parse_roi
+from ..errors import UsageError
+from ..geometry import check_roi_fits
 from ..look import (ROUND_TOLERANCE, find_video_for_csv, matplotlib_hint, plot_track,
                     read_frame, read_run_csv, roi_from_box, roi_from_points, write_contact_sheet,
                     write_frame_png)
-from . import main
-
-
-class _OneLineErrors(click.Command):
-    """A command whose argument errors are one ``lptrack: error:`` line (exit 2), not click's usage block."""
-
-    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
-        try:
-            return super().parse_args(ctx, args)
-        except click.UsageError as exc:
-            raise UsageError(f"{exc.format_message()} (see 'lptrack {self.name} --help')") from None
-
-
-def _parse_roi_option(spec: str):
-    try:
-        return parse_roi(spec)
-    except RoiError as exc:
-        message = str(exc)
-        raise RoiError(message if ROI_SYNTAX in message else f"{message}; expected {ROI_SYNTAX}") from None
+from . import OneLineErrors, main, parse_roi_option
 
 
 def _run_stem(csv_path: Path) -> str:
@@ -44,7 +26,7 @@ def _run_stem(csv_path: Path) -> str:
 _VIDEO = click.Path(dir_okay=True, path_type=Path)
 
 
-@main.command("frame", cls=_OneLineErrors, epilog="""\b
+@main.command("frame", cls=OneLineErrors, epilog="""\b
 Examples:
   lptrack frame clip.mp4                          # frame 0 -> clip.frame0.png
   lptrack frame clip.mp4 --at 120 --grid 20
@@ -73,12 +55,12 @@ def frame(video: Path, index: int | None, time_s: float | None, out_png: Path | 
     """
     if index is not None and time_s is not None:
         raise UsageError("--at and --time contradict each other; give one of them")
-    roi = _parse_roi_option(roi_spec) if roi_spec is not None else None
+    roi = parse_roi_option(roi_spec) if roi_spec is not None else None
     path = write_frame_png(video, out_png, index=index, time_s=time_s, grid=grid, roi=roi, overwrite=overwrite)
     click.echo(str(path))
 
 
-@main.command("roi", cls=_OneLineErrors, epilog=f"""\b
+@main.command("roi", cls=OneLineErrors, epilog=f"""\b
 3 or 4 points give the circle through them; 5 or more an ellipse (least
 squares). A result whose semi-axes differ by at most --round-tol (default
 {ROUND_TOLERANCE:g}, i.e. {ROUND_TOLERANCE:.0%}) is printed as a circle
@@ -120,7 +102,7 @@ def roi(video: Path, index: int, box: str | None, points: str | None, round_tol:
     click.echo(f"lptrack: check it with: lptrack frame {video} --at {index} --roi {spec}", err=True)
 
 
-@main.command("plot", cls=_OneLineErrors, epilog="""\b
+@main.command("plot", cls=OneLineErrors, epilog="""\b
 The run CSV does not name its video: the thumbnail comes from --video, or
 from <stem>.mp4 (.avi, .mov, .mkv, .m4v, .webm) when exactly one such file
 sits next to the CSV (or in the current folder), where <stem> is the CSV's
@@ -166,7 +148,7 @@ def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path 
     click.echo(str(path))
 
 
-@main.command("sheet", cls=_OneLineErrors, epilog="""\b
+@main.command("sheet", cls=OneLineErrors, epilog="""\b
 Examples:
   lptrack sheet clip.mp4 clip.lptrack.csv                 # 4 x 3 frames
   lptrack sheet clip.mp4 clip.lptrack.csv --count 20 --cols 5 --width 2000

@@ -1,33 +1,34 @@
-"""``lptrack run``: track one object through one video; write the annotated video and the per-frame CSV."""
+"""``lptrack run``: track one object through one video, or through many; write annotated videos and CSVs.
+
+One video file runs in this process with a frame progress bar (:func:`~logpolar_track.pipeline.run_video`).
+Several inputs, folders, ``-`` or a ROI file make a batch (:mod:`logpolar_track.batch`): videos run in worker
+processes or on a Dask cluster, one failing video never stops the others, and a summary ends the run.
+"""
 
 from __future__ import annotations
 
 import os
+import signal
 import sys
 import textwrap
+import time
 from pathlib import Path
 
 import click
 
-from ..errors import RoiError, UsageError
-from ..geometry import ROI_SYNTAX, parse_roi
+from ..batch import (BatchSummary, VideoOutcome, find_videos, outputs_complete, plan_batch, read_roi_file,
+                     run_batch)
+from ..errors import UsageError
+from ..executor import default_jobs
+from ..geometry import ROI_SYNTAX
 from ..pipeline import CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, default_outputs, run_video
-from ..results import COLUMNS
+from ..results import COLUMNS, FORMATS
 from ..trackers import tracker_class, tracker_names
-from . import EXIT_FAILURE, main
+from . import EXIT_FAILURE, OneLineErrors, main, parse_roi_option
 
 
-class OneLineErrors(click.Command):
-    """A command whose argument errors are one ``lptrack: error:`` line (exit 2), not click's usage block.
-
-    Its epilog is built when help is shown, so it lists trackers registered after this module was imported.
-    """
-
-    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
-        try:
-            return super().parse_args(ctx, args)
-        except click.UsageError as exc:
-            raise UsageError(f"{exc.format_message()} (see 'lptrack {self.name} --help')") from None
+class RunCommand(OneLineErrors):
+    """``lptrack run``: its epilog is built when help is shown, so it lists trackers registered after import."""
 
     def format_epilog(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
         self.epilog = _epilog()
@@ -63,9 +64,9 @@ def _tracker_lines() -> str:
 
 
 def _epilog() -> str:
-    """Help text after the options: ROI syntax, CSV columns, the registered trackers, examples."""
+    """Help text after the options: ROI syntax, CSV columns, batches, the registered trackers, examples."""
     return f"""\b
-ROI (--roi, or one line in a sidecar file VIDEO-stem.roi next to the video):
+ROI (--roi, a --roi-file line, or one line in a sidecar VIDEO-stem.roi):
   cx,cy,r          circle: centre and radius in pixels
   cx,cy,a,b,angle  ellipse: semi-axes a, b in pixels; angle of axis a in
                    degrees counter-clockwise as seen on screen
@@ -78,6 +79,18 @@ CSV columns (one row per frame):
   {",".join(COLUMNS)}
   scale is relative to the first row; rotation_deg is counter-clockwise on
   screen, cumulative (unwrapped); score in [0, 1]; status init/tracked/lost.
+  --format jsonl writes the same as JSON lines (empty fields as null).
+
+\b
+Many videos (several VIDEOs, folders searched recursively, '-' = paths on
+stdin, or --roi-file alone):
+  ROI per video: its --roi-file line (video,roi[,start_frame][,tracker]),
+  else --roi, else its .roi sidecar; a video with none fails alone.
+  Outputs mirror the inputs under --out-dir (default: the current folder),
+  or --csv - streams every video's rows with a leading 'video' column.
+  Videos run in --jobs processes or on a Dask cluster (--scheduler); one bad
+  video never stops the others. Exit 0 all ok, 1 any failed, 2 bad
+  arguments, 130 interrupted (only complete outputs are left).
 
 \b
 Trackers:
@@ -88,30 +101,48 @@ Examples:
   lptrack run clip.mp4 --roi 320,240,40
   lptrack run clip.mp4 --roi 320,240,60,30,15 --tracker diffdecomp
   lptrack run clip.mp4 --roi 320,240,40 --no-video --csv - > track.csv
+  lptrack run footage/ --roi-file rois.csv --out-dir tracks --jobs 4
+  find footage -name '*.mp4' | lptrack run - --roi-file rois.csv --no-video --csv - > all.csv
 """
 
 
-@main.command("run", cls=OneLineErrors)
-@click.argument("video", type=click.Path(dir_okay=True, path_type=Path), metavar="VIDEO")
+@main.command("run", cls=RunCommand)
+@click.argument("videos", nargs=-1, metavar="VIDEO...")
 @click.option("--roi", "roi_spec", metavar="SPEC",
               help="Object on the start frame: 'cx,cy,r' or 'cx,cy,a,b,angle' (pixels; degrees CCW). "
-                   "Default: read from VIDEO's .roi sidecar.")
+                   "Default: the video's .roi sidecar.")
+@click.option("--roi-file", type=click.Path(dir_okay=False, path_type=Path), metavar="CSV",
+              help="ROIs per video: lines 'video,roi[,start_frame][,tracker]' (paths relative to the file). "
+                   "With no VIDEO, its videos are the inputs.")
 @click.option("--tracker", type=TrackerChoice(), default=DEFAULT_TRACKER, show_default=True, metavar="NAME",
               help="Tracking method (see the list below).")
 @click.option("--start-frame", type=click.IntRange(min=0), default=0, show_default=True, metavar="N",
               help="Frame index (0 = first) the ROI refers to; tracking starts there.")
 @click.option("--out", "video_out", type=click.Path(dir_okay=False, path_type=Path), metavar="VIDEO_OUT",
-              help=f"Annotated video to write. Default: <video stem>{VIDEO_OUT_SUFFIX} in the current folder. "
+              help=f"Annotated video to write (one input only). Default: <video stem>{VIDEO_OUT_SUFFIX}. "
                    f"Extension .mp4/.mov (mp4v), .avi (MJPG), .mkv or .webm; falls back to MJPG .avi.")
 @click.option("--csv", "csv_out", metavar="CSV_OUT",
-              help=f"Per-frame CSV to write; '-' for stdout (then nothing else goes to stdout). "
-                   f"Default: <video stem>{CSV_OUT_SUFFIX} in the current folder.")
-@click.option("--no-video", is_flag=True, help="Do not write the annotated video (faster).")
+              help=f"Per-frame CSV to write (one input only), or '-' for stdout (then nothing else goes to "
+                   f"stdout). Default: <video stem>{CSV_OUT_SUFFIX}.")
+@click.option("--out-dir", type=click.Path(file_okay=False, path_type=Path), metavar="DIR",
+              help="Folder for the outputs (created if needed), mirroring the inputs' folders. "
+                   "Default: the current folder.")
+@click.option("--format", "data_format", type=click.Choice(tuple(FORMATS)), default="csv", show_default=True,
+              help="Per-frame data as CSV or JSON lines.")
+@click.option("--no-video", is_flag=True, help="Do not write annotated videos (faster).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-@click.option("--quiet", "-q", is_flag=True, help="No progress bar, no summary line on stderr.")
-def run(video: Path, roi_spec: str | None, tracker: str, start_frame: int, video_out: Path | None,
-        csv_out: str | None, no_video: bool, overwrite: bool, quiet: bool) -> None:
-    """Track the object inside a circle or ellipse through VIDEO.
+@click.option("--skip-existing", is_flag=True,
+              help="Leave alone videos whose outputs all exist (resumes an interrupted batch).")
+@click.option("--jobs", "-j", type=click.IntRange(min=1), default=None, metavar="N",
+              help="Videos tracked in parallel processes. Default: the number of cores.")
+@click.option("--scheduler", metavar="ADDRESS",
+              help="Run the videos on this Dask scheduler (e.g. tcp://10.0.0.5:8786) instead; needs "
+                   "pip install 'lptrack[dask]' and the files at the same paths on the workers.")
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary on stderr (failures still).")
+def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tracker: str, start_frame: int,
+        video_out: Path | None, csv_out: str | None, out_dir: Path | None, data_format: str, no_video: bool,
+        overwrite: bool, skip_existing: bool, jobs: int | None, scheduler: str | None, quiet: bool) -> None:
+    """Track the object inside a circle or ellipse through VIDEO (or many).
 
     Writes an annotated copy of the video (the tracked outline, a radius line
     that turns with the object, a readout of frame, scale, rotation and score;
@@ -119,35 +150,78 @@ def run(video: Path, roi_spec: str | None, tracker: str, start_frame: int, video
     frame. Outputs are written to temporary names and renamed when complete;
     existing files are kept unless --overwrite is given.
     """
-    roi = None
-    if roi_spec is not None:
-        try:
-            roi = parse_roi(roi_spec)
-        except RoiError as exc:
-            message = str(exc)
-            raise RoiError(message if ROI_SYNTAX in message else f"{message}; expected {ROI_SYNTAX}") from None
+    roi = None if roi_spec is None else parse_roi_option(roi_spec)
     if no_video and video_out is not None:
         raise UsageError("--out and --no-video contradict each other; give one of them")
-    default_video, default_csv = default_outputs(video)
+    if overwrite and skip_existing:
+        raise UsageError("--overwrite and --skip-existing contradict each other; give one of them")
+    if not videos and roi_file is None:
+        raise UsageError("give a VIDEO (a file, a folder, or '-' for paths on stdin), or --roi-file "
+                         "(see 'lptrack run --help')")
+    single = len(videos) == 1 and videos[0] != "-" and not Path(videos[0]).is_dir() and roi_file is None
+    if single:
+        _run_one(Path(videos[0]), roi, tracker=tracker, start_frame=start_frame, video_out=video_out,
+                 csv_out=csv_out, out_dir=out_dir, data_format=data_format, no_video=no_video,
+                 overwrite=overwrite, skip_existing=skip_existing, quiet=quiet)
+        return
+    if video_out is not None:
+        raise UsageError("--out names one video's output; with several videos give --out-dir DIR")
+    if csv_out not in (None, "-"):
+        raise UsageError("--csv names one video's output; with several videos give --out-dir DIR, "
+                         "or --csv - for one stream with a 'video' column")
+    stream = csv_out == "-"
+    if stream and skip_existing:
+        raise UsageError("--skip-existing needs outputs in files; it cannot apply to --csv -")
+    entries = read_roi_file(roi_file) if roi_file is not None else []
+    inputs = find_videos(videos)
+    if not inputs and not entries:
+        raise UsageError(f"no videos found in {', '.join(repr(v) for v in videos)}")
+    plan = plan_batch(inputs, roi=roi, roi_entries=entries, tracker=tracker, start_frame=start_frame,
+                      out_dir=out_dir or ".", video=not no_video, stream=stream, data_format=data_format,
+                      overwrite=overwrite, skip_existing=skip_existing)
+    summary = _run_many(plan, jobs=jobs or default_jobs(), scheduler=scheduler, stream=stream,
+                        data_format=data_format, quiet=quiet)
+    if summary.failed:
+        sys.exit(EXIT_FAILURE)
+
+
+def _stdout_closed() -> None:
+    """`lptrack run ... --csv - | head`: the reader left; stop quietly, without Python's shutdown noise."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    sys.exit(EXIT_FAILURE)
+
+
+def _run_one(video: Path, roi, *, tracker: str, start_frame: int, video_out: Path | None, csv_out: str | None,
+             out_dir: Path | None, data_format: str, no_video: bool, overwrite: bool, skip_existing: bool,
+             quiet: bool) -> None:
+    """One video in this process, errors raised as they are (exit 1 or 2)."""
+    if out_dir is not None:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    default_video, default_csv = default_outputs(video, out_dir or ".")
     if not no_video and video_out is None:
         video_out = default_video
     if csv_out is None:
-        csv_out = str(default_csv)
+        csv_out = str(default_csv.with_suffix(FORMATS[data_format]))
     show = not quiet
+    if skip_existing and csv_out != "-" and outputs_complete(None if no_video else Path(video_out), Path(csv_out)):
+        if show:
+            click.echo(f"lptrack: {video.name}: outputs exist; skipped (--skip-existing)", err=True)
+        return
     try:
         summary = run_video(video, roi, tracker=tracker, start_frame=start_frame,
                             video_out=None if no_video else video_out, csv_out=csv_out, overwrite=overwrite,
-                            progress=show and sys.stderr.isatty())
+                            progress=show and sys.stderr.isatty(), csv_options={"data_format": data_format})
     except BrokenPipeError:
-        # `lptrack run ... --csv - | head`: the reader left; stop quietly, without Python's shutdown noise.
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-        sys.exit(EXIT_FAILURE)
+        _stdout_closed()
     if not show:
         return
     if summary.video_fps_guessed:
         click.echo(f"lptrack: warning: '{video}' reports no frame rate; assumed {summary.video_fps:g} fps "
                    f"for time_s and the output video", err=True)
+    if summary.truncated:
+        click.echo(f"lptrack: warning: {_truncation(video.name, summary.frames, summary.expected_frames)}",
+                   err=True)
     if summary.video_out is not None and video_out is not None and summary.video_out != Path(video_out):
         click.echo(f"lptrack: warning: could not write '{video_out}'; wrote '{summary.video_out}' "
                    f"({summary.fourcc}) instead", err=True)
@@ -155,6 +229,80 @@ def run(video: Path, roi_spec: str | None, tracker: str, start_frame: int, video
     if summary.video_out is not None:
         outputs.append(f"video {summary.video_out} ({summary.fourcc}, {summary.video_fps:g} fps)")
     if summary.csv_out is not None:
-        outputs.append("CSV to stdout" if summary.csv_out == "-" else f"CSV {summary.csv_out}")
+        what = data_format.upper()
+        outputs.append(f"{what} to stdout" if summary.csv_out == "-" else f"{what} {summary.csv_out}")
     click.echo(f"lptrack: {video.name}: {summary.frames} frames ({summary.lost} lost) with {summary.tracker} "
                f"at {summary.processing_fps:.1f} frames/s; {'; '.join(outputs)}", err=True)
+
+
+def _truncation(label: str, frames: int, expected: int) -> str:
+    return (f"{label}: ended after {frames} of the {expected} frames its container announces (truncated?); "
+            f"its outputs hold those {frames}")
+
+
+def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_format: str,
+              quiet: bool) -> BatchSummary:
+    """A batch: progress bar of videos (ok/failed, frames/s), then the summary and every failure on stderr."""
+    bar = None
+    if not quiet and sys.stderr.isatty():
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(plan.order), unit="video", file=sys.stderr, dynamic_ncols=True, leave=False,
+                   desc="lptrack")
+    counts = {"ok": 0, "failed": 0, "skipped": 0}
+    started = time.perf_counter()
+    frames_done = [0]
+
+    def show() -> None:
+        elapsed = max(time.perf_counter() - started, 1e-9)
+        bar.set_postfix_str(f"ok {counts['ok']}, failed {counts['failed']}, "
+                            f"{frames_done[0] / elapsed:.0f} frames/s", refresh=True)
+
+    def on_outcome(outcome: VideoOutcome) -> None:
+        counts[outcome.status] += 1
+        if bar is not None:
+            bar.update(1)
+            show()
+
+    def on_frames(total: int) -> None:
+        frames_done[0] = total
+        if bar is not None:
+            show()
+
+    previous = signal.signal(signal.SIGTERM, _terminated)
+    try:
+        summary = run_batch(plan, jobs=jobs, scheduler=scheduler, stream=sys.stdout if stream else None,
+                            data_format=data_format, on_outcome=on_outcome, on_frames=on_frames)
+    except BrokenPipeError:
+        _stdout_closed()
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        if bar is not None:
+            bar.close()
+    _report(summary, quiet=quiet)
+    return summary
+
+
+def _terminated(signum, frame):
+    # SIGTERM stops a batch like Ctrl-C: workers are stopped and nothing half-written is left.
+    raise KeyboardInterrupt
+
+
+def _report(summary: BatchSummary, *, quiet: bool) -> None:
+    """The end of a batch on stderr: one summary line, then one line per failed or truncated video."""
+    if not quiet:
+        seconds = max(summary.seconds, 1e-9)
+        parts = [f"{summary.count('ok')} ok"]
+        if summary.count("skipped"):
+            parts.append(f"{summary.count('skipped')} skipped (outputs exist)")
+        parts.append(f"{summary.count('failed')} failed")
+        ran = summary.count("ok") + summary.count("failed")
+        click.echo(f"lptrack: {len(summary.outcomes)} videos: {', '.join(parts)}; {summary.frames} frames in "
+                   f"{summary.seconds:.1f} s ({summary.frames / seconds:.1f} frames/s, "
+                   f"{ran / seconds:.2f} videos/s)", err=True)
+        for outcome in summary.outcomes:
+            if outcome.truncated:
+                click.echo(f"lptrack: warning: {_truncation(outcome.label, outcome.frames, outcome.expected_frames)}",
+                           err=True)
+    for outcome in summary.failed:
+        click.echo(f"lptrack: failed: {outcome.label}: {outcome.reason}", err=True)

@@ -1,0 +1,460 @@
+"""Track objects through many videos: find the videos, give each its ROI and outputs, run them, gather results.
+
+``lptrack run`` with several inputs is :func:`plan_batch` then :func:`run_batch`:
+
+- inputs are video files, folders (searched recursively for :data:`VIDEO_EXTENSIONS`, sorted) and ``-``
+  (paths read from standard input, one per line) -- :func:`find_videos`;
+- each video's ROI comes from a ROI file (:func:`read_roi_file`: ``video,roi[,start_frame][,tracker]``), else
+  from one ROI given for all, else from the ``.roi`` sidecar next to the video;
+- outputs mirror the inputs' relative paths under an output folder, never two inputs onto one output
+  (:func:`plan_batch`); or every video's rows go to one stream with a leading ``video`` column;
+- videos run one after another, in parallel worker processes, or on a Dask cluster
+  (:mod:`logpolar_track.executor`), with the same outputs byte for byte whichever runs them.
+
+One bad video (missing, not a video, no frames, ROI outside its frame, a worker killed) fails alone and is
+reported; the others go on. Outputs are written under temporary names and renamed when complete, so a batch
+cut short leaves only complete outputs, and ``skip_existing`` resumes it.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+import sys
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import IO, Callable, Iterable
+
+from .errors import RoiError, UsageError
+from .executor import TaskOutcome, run_tasks
+from .geometry import ROI_SYNTAX, Ellipse, parse_roi
+from .pipeline import CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, run_video
+from .results import FORMATS, header_line
+from .trackers import tracker_class
+from .video import CODECS_BY_EXTENSION, temporary_path
+
+#: File extensions searched for in input folders (case-insensitive).
+VIDEO_EXTENSIONS: tuple[str, ...] = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".ts",
+                                     ".mts", ".m2ts", ".wmv", ".flv", ".3gp", ".ogv")
+
+#: Stem ending of lptrack's own annotated videos, which folder searches skip (``clip.lptrack.mp4``).
+OUTPUT_STEM_SUFFIX = Path(VIDEO_OUT_SUFFIX).stem
+
+
+@dataclass(frozen=True)
+class VideoInput:
+    """One input video.
+
+    Attributes
+    ----------
+    path : Path
+        The video as given or found (relative paths stay relative to the current folder).
+    root : Path or None
+        The input folder it was found in (outputs mirror the path relative to it); None for videos named
+        directly, on standard input or in a ROI file.
+    """
+
+    path: Path
+    root: Path | None = None
+
+
+@dataclass(frozen=True)
+class RoiEntry:
+    """One line of a ROI file: the video, its ROI, and optionally its start frame and tracker."""
+
+    video: Path
+    roi: Ellipse
+    start_frame: int | None = None
+    tracker: str | None = None
+
+
+@dataclass(frozen=True)
+class VideoJob:
+    """Everything a worker needs to track one video (picklable; paths absolute).
+
+    ``roi`` None means: read the video's ``.roi`` sidecar. ``csv_out`` None with ``stream`` True means: return
+    the rows (with the ``video`` column) instead of writing a file.
+    """
+
+    label: str
+    video: Path
+    roi: Ellipse | None
+    tracker: str
+    start_frame: int
+    video_out: Path | None
+    csv_out: Path | None
+    data_format: str = "csv"
+    overwrite: bool = False
+    stream: bool = False
+
+
+@dataclass(frozen=True)
+class VideoOutcome:
+    """What happened to one video of a batch.
+
+    ``status`` is ``ok``, ``failed`` (``reason`` says why) or ``skipped`` (its outputs existed). ``frames``
+    counts tracked frames; ``expected_frames`` is what the container announced (``truncated`` when fewer came).
+    """
+
+    label: str
+    status: str
+    reason: str | None = None
+    frames: int = 0
+    lost: int = 0
+    expected_frames: int = 0
+    seconds: float = 0.0
+    rows: str | None = None
+
+    @property
+    def truncated(self) -> bool:
+        return self.status == "ok" and 0 < self.frames < self.expected_frames
+
+
+@dataclass
+class BatchSummary:
+    """The outcome of every video in input order, and the wall-clock time of the batch."""
+
+    outcomes: list[VideoOutcome] = field(default_factory=list)
+    seconds: float = 0.0
+
+    def count(self, status: str) -> int:
+        return sum(o.status == status for o in self.outcomes)
+
+    @property
+    def frames(self) -> int:
+        return sum(o.frames for o in self.outcomes)
+
+    @property
+    def failed(self) -> list[VideoOutcome]:
+        return [o for o in self.outcomes if o.status == "failed"]
+
+
+# -- finding videos and their ROIs ---------------------------------------------------------------------
+
+def is_video_name(path: Path) -> bool:
+    """Whether a folder search takes ``path`` (relative to the folder): a video extension, nothing hidden on
+    the way (temporary outputs are hidden), not one of lptrack's own annotated videos."""
+    return (path.suffix.lower() in VIDEO_EXTENSIONS and not any(part.startswith(".") for part in path.parts)
+            and not path.stem.endswith(OUTPUT_STEM_SUFFIX))
+
+
+def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None) -> list[VideoInput]:
+    """The videos named by ``inputs``, in order, each once.
+
+    Parameters
+    ----------
+    inputs : iterable of str
+        Video files (kept even if missing: they fail as videos later, without stopping the others), folders
+        (searched recursively for :func:`is_video_name` files, sorted by path) and ``-`` (one path per line
+        from ``stdin``; blank lines and lines starting with ``#`` ignored).
+    stdin : text stream, optional
+        Where ``-`` reads (default ``sys.stdin``).
+
+    Raises
+    ------
+    UsageError
+        ``-`` given twice.
+    """
+    found: list[VideoInput] = []
+    seen: set[Path] = set()
+
+    def add(video: VideoInput) -> None:
+        key = video.path.resolve()
+        if key not in seen:
+            seen.add(key)
+            found.append(video)
+
+    read_stdin = False
+    for text in inputs:
+        if text == "-":
+            if read_stdin:
+                raise UsageError("'-' (video paths on standard input) can be given only once")
+            read_stdin = True
+            for line in (stdin if stdin is not None else sys.stdin):
+                line = line.strip()
+                if line and not line.startswith("#"):
+                    add(VideoInput(Path(line)))
+            continue
+        path = Path(text)
+        if path.is_dir():
+            for video in sorted(p for p in path.rglob("*") if p.is_file() and is_video_name(p.relative_to(path))):
+                add(VideoInput(video, root=path))
+        else:
+            add(VideoInput(path))
+    return found
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def read_roi_file(path) -> list[RoiEntry]:
+    """The entries of a ROI file, in file order.
+
+    A CSV file with one video per line: ``video,roi[,start_frame][,tracker]``. ``roi`` is ``cx,cy,r`` or
+    ``cx,cy,a,b,angle`` (pixels; degrees counter-clockwise on screen) and may be quoted or not
+    (``clip.mp4,"320,240,40",0,lpcf`` and ``clip.mp4,320,240,40,0,lpcf`` are the same). An optional header line
+    starts with ``video``; blank lines and lines starting with ``#`` are ignored. Relative video paths are
+    relative to the ROI file's folder.
+
+    Raises
+    ------
+    UsageError
+        The file cannot be read, or a line is malformed (the message gives its number), or lists a video twice.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise UsageError(f"cannot read ROI file '{path}': {getattr(exc, 'strerror', None) or exc}") from None
+    entries: list[RoiEntry] = []
+    seen: dict[Path, int] = {}
+    expected = f"video,roi[,start_frame][,tracker] with roi {ROI_SYNTAX}"
+    for number, row in enumerate(csv.reader(io.StringIO(text)), start=1):
+        if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
+            continue
+        if number == 1 and row[0].strip().lower() == "video":
+            continue
+        where = f"ROI file '{path}' line {number}"
+        video_text = row[0].strip()
+        # Unquoted ROIs spread over several fields; quoted ones hold commas: flatten both the same way.
+        values = [v.strip() for field_ in row[1:] for v in field_.split(",") if v.strip()]
+        tracker = values.pop() if values and not _is_number(values[-1]) else None
+        start_frame = None
+        if len(values) in (4, 6):
+            start_text = values.pop()
+            if not start_text.isdigit():
+                raise UsageError(f"{where}: start_frame must be a frame index >= 0, got '{start_text}'")
+            start_frame = int(start_text)
+        if not video_text or len(values) not in (3, 5):
+            raise UsageError(f"{where}: expected {expected}, got '{','.join(row)}'")
+        try:
+            roi = parse_roi(",".join(values))
+        except RoiError as exc:
+            raise UsageError(f"{where}: {exc}") from None
+        if tracker is not None:
+            tracker_class(tracker)  # an unknown name is a UsageError listing the known ones
+        video = Path(video_text)
+        if not video.is_absolute():
+            video = path.parent / video
+        key = video.resolve()
+        if key in seen:
+            raise UsageError(f"{where}: '{video_text}' is already listed on line {seen[key]}")
+        seen[key] = number
+        entries.append(RoiEntry(video, roi, start_frame, tracker))
+    return entries
+
+
+# -- planning outputs ----------------------------------------------------------------------------------
+
+def _data_suffix(data_format: str) -> str:
+    return Path(CSV_OUT_SUFFIX).stem + FORMATS[data_format]  # ".lptrack" + ".csv" / ".jsonl"
+
+
+def _relative_names(videos: list[VideoInput]) -> list[Path]:
+    """Each input's path relative to its root folder; loose files relative to their common folder."""
+    loose = [v.path.resolve().parent for v in videos if v.root is None]
+    common = Path(os.path.commonpath(loose)) if loose else None
+    return [v.path.relative_to(v.root) if v.root is not None else v.path.resolve().relative_to(common)
+            for v in videos]
+
+
+def video_output_candidates(video_out: Path) -> list[Path]:
+    """Where the annotated video for ``video_out`` may end up (the wanted name, or a fallback codec's)."""
+    options = CODECS_BY_EXTENSION.get(video_out.suffix.lower(), ())
+    return list(dict.fromkeys(video_out.with_suffix(ext) if ext != video_out.suffix.lower() else video_out
+                              for _, ext in options)) or [video_out]
+
+
+def outputs_complete(video_out: Path | None, csv_out: Path | None) -> bool:
+    """Whether a run with these outputs (None: not wanted) finished: each exists under its final name.
+
+    Outputs are renamed to their final names only when complete, so existing means complete.
+    """
+    if video_out is None and csv_out is None:
+        return False
+    if csv_out is not None and not csv_out.exists():
+        return False
+    return video_out is None or any(p.exists() for p in video_output_candidates(video_out))
+
+
+@dataclass(frozen=True)
+class BatchPlan:
+    """The jobs to run, and the videos failed or skipped before running (e.g. no ROI, output clash)."""
+
+    jobs: list[VideoJob]
+    order: list[str]
+    settled: dict[str, VideoOutcome]
+
+
+def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entries: Iterable[RoiEntry] = (),
+               tracker: str = DEFAULT_TRACKER, start_frame: int = 0, out_dir=".", video: bool = True,
+               stream: bool = False, data_format: str = "csv", overwrite: bool = False,
+               skip_existing: bool = False) -> BatchPlan:
+    """Give every video its ROI, start frame, tracker and outputs.
+
+    Parameters
+    ----------
+    videos : list of VideoInput
+        From :func:`find_videos`. If empty, the videos of ``roi_entries`` are the inputs.
+    roi : Ellipse, optional
+        ROI for every video that has no entry in ``roi_entries``; without it, such videos read their ``.roi``
+        sidecar (and fail alone if they have none).
+    roi_entries : iterable of RoiEntry
+        Per-video ROIs (:func:`read_roi_file`); their start frame and tracker override the defaults.
+    tracker, start_frame
+        Defaults for videos whose entry does not say.
+    out_dir : path
+        Outputs go to ``out_dir/<path relative to the input folder>/<stem>.lptrack.{mp4,csv}``; a file name
+        shared by two inputs (``a.mp4`` and ``a.avi``) keeps its extension instead: ``a.mp4.lptrack.csv``.
+    video : bool
+        Write annotated videos.
+    stream : bool
+        Return each video's rows (labelled with a ``video`` column) instead of writing data files.
+    data_format : {'csv', 'jsonl'}
+    overwrite, skip_existing : bool
+        Replace existing outputs; or leave alone every video whose outputs all exist (status ``skipped``).
+    """
+    entries = {e.video.resolve(): e for e in roi_entries}
+    if not videos:
+        videos = [VideoInput(e.video) for e in entries.values()]
+    out_dir = Path(out_dir).resolve()
+    relative = _relative_names(videos)
+    by_stem: dict[Path, int] = {}
+    for rel in relative:
+        by_stem[rel.with_suffix("")] = by_stem.get(rel.with_suffix(""), 0) + 1
+    jobs, order, settled = [], [], {}
+    claimed: dict[Path, str] = {}
+    for item, rel in zip(videos, relative):
+        label = str(item.path)
+        order.append(label)
+        # Two inputs sharing a stem in one folder keep their extension in the output names.
+        base = rel.with_suffix("") if by_stem[rel.with_suffix("")] == 1 else rel
+        folder = out_dir / base.parent
+        video_out = folder / f"{base.name}{VIDEO_OUT_SUFFIX}" if video else None
+        csv_out = None if stream else folder / f"{base.name}{_data_suffix(data_format)}"
+        entry = entries.get(item.path.resolve())
+        job = VideoJob(label=label, video=item.path.resolve(), roi=entry.roi if entry else roi,
+                       tracker=(entry.tracker if entry and entry.tracker else tracker),
+                       start_frame=(entry.start_frame if entry and entry.start_frame is not None else start_frame),
+                       video_out=video_out, csv_out=csv_out, data_format=data_format, overwrite=overwrite,
+                       stream=stream)
+        clash = next((claimed[p] for p in (video_out, csv_out) if p is not None and p in claimed), None)
+        if clash is not None:
+            settled[label] = VideoOutcome(label, "failed", f"its outputs would overwrite those of '{clash}'; "
+                                                           f"give the two videos different names or folders")
+            continue
+        claimed.update({p: label for p in (video_out, csv_out) if p is not None})
+        if skip_existing and outputs_complete(job.video_out, job.csv_out):
+            settled[label] = VideoOutcome(label, "skipped", "outputs exist")
+            continue
+        jobs.append(job)
+    return BatchPlan(jobs, order, settled)
+
+
+# -- running -------------------------------------------------------------------------------------------
+
+def run_job(job: VideoJob, report: Callable[[int], None] | None = None) -> VideoOutcome:
+    """Track one video of a batch (the unit of work a worker runs); raises on failure.
+
+    Output folders are created as needed. ``report(frames_done)`` is called as frames are tracked.
+    """
+    for out in (job.video_out, job.csv_out):
+        if out is not None:
+            out.parent.mkdir(parents=True, exist_ok=True)
+    buffer = io.StringIO() if job.stream else None
+    csv_options = {"data_format": job.data_format}
+    if job.stream:
+        csv_options.update(stream=buffer, video=job.label, header=False)
+    progress = None if report is None else (lambda done, total: report(done))
+    summary = run_video(job.video, job.roi, tracker=job.tracker, start_frame=job.start_frame,
+                        video_out=job.video_out, csv_out="-" if job.stream else job.csv_out,
+                        overwrite=job.overwrite, progress=progress, csv_options=csv_options)
+    return VideoOutcome(job.label, "ok", frames=summary.frames, lost=summary.lost,
+                        expected_frames=summary.expected_frames, seconds=summary.seconds,
+                        rows=None if buffer is None else buffer.getvalue())
+
+
+def remove_temporary_outputs(job: VideoJob, pid: int) -> None:
+    """Delete the temporary files a worker with process id ``pid`` left for ``job`` (it was killed)."""
+    for out in (job.video_out, job.csv_out):
+        if out is None:
+            continue
+        for candidate in video_output_candidates(out) if out == job.video_out else [out]:
+            temporary_path(candidate, pid=pid).unlink(missing_ok=True)
+
+
+def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str] | None = None,
+              data_format: str = "csv",
+              on_outcome: Callable[[VideoOutcome], None] | None = None,
+              on_frames: Callable[[int], None] | None = None) -> BatchSummary:
+    """Run a :func:`plan_batch` plan; return every video's outcome in input order.
+
+    Parameters
+    ----------
+    jobs : int
+        Worker processes (1: in this process).
+    scheduler : str or dask.distributed.Client, optional
+        Run on this Dask cluster instead.
+    stream : text stream, optional
+        Where streamed rows go (the plan must have been made with ``stream=True``): one CSV header (with the
+        ``video`` column) first, then each video's rows together, in input order whatever order they finish in.
+    on_outcome : callable, optional
+        Called with each video's outcome as it settles (progress display).
+    on_frames : callable, optional
+        Called with the total frames tracked so far, as workers report them.
+    """
+    started = time.perf_counter()
+    outcomes = dict(plan.settled)
+    if stream is not None and data_format == "csv":
+        stream.write(header_line(video=True))
+    next_out = 0
+
+    def flush_stream() -> None:
+        nonlocal next_out
+        while next_out < len(plan.order) and plan.order[next_out] in outcomes:
+            rows = outcomes[plan.order[next_out]].rows
+            if stream is not None and rows:
+                stream.write(rows)
+            next_out += 1
+        if stream is not None:
+            stream.flush()
+
+    for outcome in plan.settled.values():
+        if on_outcome is not None:
+            on_outcome(outcome)
+    flush_stream()
+    done_frames = [0] * len(plan.jobs)
+
+    def progress(index: int, done: int) -> None:
+        done_frames[index] = done
+        if on_frames is not None:
+            on_frames(sum(done_frames))
+
+    def worker_died(index: int, pid: int) -> None:
+        remove_temporary_outputs(plan.jobs[index], pid)
+
+    for result in run_tasks(run_job, plan.jobs, jobs=jobs, scheduler=scheduler, on_progress=progress,
+                            on_worker_death=worker_died):
+        outcome = _settle(plan.jobs[result.index], result)
+        done_frames[result.index] = outcome.frames
+        outcomes[outcome.label] = outcome
+        if on_frames is not None:
+            on_frames(sum(done_frames))
+        if on_outcome is not None:
+            on_outcome(outcome)
+        flush_stream()
+    return BatchSummary([replace(outcomes[label], rows=None) for label in plan.order],
+                        time.perf_counter() - started)
+
+
+def _settle(job: VideoJob, result: TaskOutcome) -> VideoOutcome:
+    if result.ok:
+        return result.value
+    return VideoOutcome(job.label, "failed", result.error)

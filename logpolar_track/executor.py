@@ -1,0 +1,293 @@
+"""Run independent tasks in this process, in parallel worker processes, or on a Dask cluster.
+
+One mechanism serves ``lptrack run`` over many videos and ``lptrack bench`` over (sequence, tracker) pairs:
+:func:`run_tasks` calls a picklable top-level function on each item and yields a :class:`TaskOutcome` per item
+as it finishes. A failing item never stops the others: its exception becomes the outcome's one-line ``error``.
+
+Local parallelism uses one fresh process per task (forked from a ``forkserver`` that has imported lptrack
+once, so starting one costs milliseconds). That is what makes a dying worker cost only its own task: a process
+killed by the OS or by a signal is seen by its exit code and reported as that task's failure, while a shared
+pool (``concurrent.futures``) would break and take every other task down with it. It also gives every task the
+same clean state (OpenCV's MIL, for one, is only repeatable in a fresh process).
+
+On a Dask cluster (``scheduler=``) the tasks are submitted to an existing ``dask.distributed`` scheduler; the
+workers must see the same files at the same paths (a shared file system), as with any Dask file job.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import signal
+import time
+from collections import deque
+from dataclasses import dataclass
+from multiprocessing.connection import wait
+from typing import Any, Callable, Iterator, Sequence
+
+from .errors import LptrackError, UsageError
+
+#: Seconds between progress messages a worker process sends (finer updates are dropped).
+PROGRESS_INTERVAL_S = 0.25
+
+#: Seconds a worker gets to clean up after SIGTERM before it is killed.
+TERMINATE_GRACE_S = 5.0
+
+#: Hint shown when ``scheduler`` is used without the optional Dask extra.
+DASK_HINT = "--scheduler needs Dask's distributed scheduler: pip install 'lptrack[dask]'"
+
+TaskFunction = Callable[[Any, "Callable[[int], None] | None"], Any]
+
+
+@dataclass(frozen=True)
+class TaskOutcome:
+    """How one task ended.
+
+    Attributes
+    ----------
+    index : int
+        Position of the item in the list given to :func:`run_tasks`.
+    value : Any
+        The function's return value; None if it failed.
+    error : str or None
+        One line saying why it failed (the message of an :class:`LptrackError`, ``Type: message`` of any other
+        exception, or how its worker process died); None on success.
+    """
+
+    index: int
+    value: Any = None
+    error: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+
+def default_jobs() -> int:
+    """Worker processes to use by default: the cores this process may run on."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def describe_exception(exc: BaseException) -> str:
+    """One line for a task's failure: lptrack's own messages as they are, others with their type."""
+    if isinstance(exc, LptrackError):
+        return str(exc)
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
+
+
+def run_tasks(function: TaskFunction, items: Sequence, *, jobs: int = 1, scheduler=None,
+              on_progress: Callable[[int, int], None] | None = None,
+              on_worker_death: Callable[[int, int], None] | None = None) -> Iterator[TaskOutcome]:
+    """Call ``function(item, report)`` for every item; yield a :class:`TaskOutcome` per item as each finishes.
+
+    Parameters
+    ----------
+    function : callable
+        A top-level (picklable) function ``function(item, report)``. ``report`` is None or a callable the
+        function may call with its progress so far (e.g. frames done).
+    items : sequence
+        Picklable work items.
+    jobs : int
+        1: one after another in this process. More: up to ``jobs`` worker processes at once, one per task.
+    scheduler : str or dask.distributed.Client, optional
+        Address of a Dask scheduler (``tcp://host:8786``) or a connected client; then ``jobs`` is ignored.
+    on_progress : callable, optional
+        ``on_progress(index, done)`` with what a task reported (local runs only).
+    on_worker_death : callable, optional
+        ``on_worker_death(index, pid)`` after a worker process died without finishing its task, e.g. to
+        delete its temporary files.
+
+    Yields
+    ------
+    TaskOutcome
+        In completion order.
+
+    Raises
+    ------
+    UsageError
+        ``scheduler`` given but Dask is not installed.
+    LptrackError
+        The Dask scheduler cannot be reached.
+    KeyboardInterrupt
+        On Ctrl-C (or SIGTERM turned into it by the caller), after every worker process has been stopped.
+    """
+    if scheduler is not None:
+        yield from _run_on_dask(function, items, scheduler)
+    elif jobs <= 1 or len(items) <= 1:
+        yield from _run_here(function, items, on_progress)
+    else:
+        yield from _run_in_processes(function, items, jobs, on_progress, on_worker_death)
+
+
+def _run_here(function, items, on_progress) -> Iterator[TaskOutcome]:
+    for index, item in enumerate(items):
+        report = None if on_progress is None else (lambda done, i=index: on_progress(i, done))
+        try:
+            value = function(item, report)
+        except (KeyboardInterrupt, SystemExit):
+            raise
+        except Exception as exc:  # noqa: BLE001 - one failing task must not stop the others
+            yield TaskOutcome(index, error=describe_exception(exc))
+        else:
+            yield TaskOutcome(index, value)
+
+
+# -- local worker processes ----------------------------------------------------------------------------
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+def _worker_main(connection, function, item) -> None:
+    """Body of a worker process: run one task, send ``("progress", n)`` messages then one final message."""
+    # SIGTERM from the parent (its Ctrl-C) unwinds like Ctrl-C, so the task deletes its temporary outputs.
+    signal.signal(signal.SIGTERM, _interrupt)
+    last = 0.0
+
+    def report(done: int) -> None:
+        nonlocal last
+        now = time.monotonic()
+        if now - last >= PROGRESS_INTERVAL_S:
+            last = now
+            connection.send(("progress", done))
+
+    try:
+        message = ("done", function(item, report))
+    except KeyboardInterrupt:
+        message = ("error", "interrupted")
+    except Exception as exc:  # noqa: BLE001 - reported to the parent as this task's failure
+        message = ("error", describe_exception(exc))
+    try:
+        connection.send(message)
+    except Exception as exc:  # noqa: BLE001 - e.g. a result that cannot be pickled
+        connection.send(("error", f"cannot return the result: {describe_exception(exc)}"))
+    connection.close()
+
+
+def _context():
+    methods = multiprocessing.get_all_start_methods()
+    if "forkserver" in methods:
+        context = multiprocessing.get_context("forkserver")
+        # Workers fork from a server that imported lptrack once, instead of importing it per task.
+        context.set_forkserver_preload(["logpolar_track.batch", "logpolar_track.bench"])
+        return context
+    return multiprocessing.get_context("spawn")
+
+
+def _death_reason(exitcode: int | None) -> str:
+    if exitcode is not None and exitcode < 0:
+        try:
+            name = signal.Signals(-exitcode).name
+        except ValueError:
+            name = f"signal {-exitcode}"
+        return f"worker process was killed ({name}) before it finished"
+    return f"worker process exited (code {exitcode}) before it finished"
+
+
+@dataclass
+class _Running:
+    index: int
+    process: Any
+    connection: Any
+    result: tuple | None = None
+
+
+def _run_in_processes(function, items, jobs, on_progress, on_worker_death) -> Iterator[TaskOutcome]:
+    context = _context()
+    pending = deque(enumerate(items))
+    running: list[_Running] = []
+    try:
+        while pending or running:
+            while pending and len(running) < jobs:
+                index, item = pending.popleft()
+                receiver, sender = context.Pipe(duplex=False)
+                process = context.Process(target=_worker_main, args=(sender, function, item),
+                                          name=f"lptrack-task-{index}", daemon=True)
+                process.start()
+                sender.close()  # the child holds its own end; EOF on ours then means it is gone
+                running.append(_Running(index, process, receiver))
+            wait([r.connection for r in running] + [r.process.sentinel for r in running])
+            for task in list(running):
+                _drain(task, on_progress)
+                if task.result is None and task.process.is_alive():
+                    continue
+                task.process.join()
+                _drain(task, on_progress)
+                running.remove(task)
+                task.connection.close()
+                if task.result is None:
+                    if on_worker_death is not None:
+                        on_worker_death(task.index, task.process.pid)
+                    yield TaskOutcome(task.index, error=_death_reason(task.process.exitcode))
+                elif task.result[0] == "done":
+                    yield TaskOutcome(task.index, task.result[1])
+                else:
+                    yield TaskOutcome(task.index, error=task.result[1])
+    finally:
+        _stop(running, on_worker_death)
+
+
+def _drain(task: _Running, on_progress) -> None:
+    """Read every message waiting from ``task``'s worker; keep the final one."""
+    try:
+        while task.result is None and task.connection.poll():
+            kind, payload = task.connection.recv()
+            if kind == "progress":
+                if on_progress is not None:
+                    on_progress(task.index, payload)
+            else:
+                task.result = (kind, payload)
+    except (EOFError, OSError):
+        pass  # the worker is gone; its exit code tells why
+
+
+def _stop(running: list[_Running], on_worker_death) -> None:
+    """Stop workers still running (Ctrl-C, or the consumer stopped early): SIGTERM, a grace period, SIGKILL."""
+    for task in running:
+        if task.process.is_alive():
+            task.process.terminate()
+    deadline = time.monotonic() + TERMINATE_GRACE_S
+    for task in running:
+        task.process.join(max(0.0, deadline - time.monotonic()))
+        if task.process.is_alive():
+            task.process.kill()
+            task.process.join()
+        task.connection.close()
+        if on_worker_death is not None:
+            on_worker_death(task.index, task.process.pid)
+
+
+# -- Dask ----------------------------------------------------------------------------------------------
+
+def _run_on_dask(function, items, scheduler) -> Iterator[TaskOutcome]:
+    try:
+        from dask.distributed import Client, as_completed
+    except ImportError:
+        raise UsageError(DASK_HINT) from None
+    own_client = not isinstance(scheduler, Client)
+    if own_client:
+        try:
+            client = Client(scheduler, timeout="15s", set_as_default=False)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise LptrackError(f"cannot reach the Dask scheduler '{scheduler}': {describe_exception(exc)}") from None
+    else:
+        client = scheduler
+    futures = {}
+    try:
+        for index, item in enumerate(items):
+            futures[client.submit(function, item, None, pure=False)] = index
+        for future in as_completed(futures, loop=client.loop):
+            index = futures[future]
+            if future.status == "finished":
+                yield TaskOutcome(index, future.result())
+            else:
+                exc = future.exception()
+                yield TaskOutcome(index, error=describe_exception(exc) if exc is not None else future.status)
+    finally:
+        client.cancel(list(futures))
+        if own_client:
+            client.close()

@@ -1,0 +1,339 @@
+"""``lptrack run`` over many videos: folders, stdin, ROI files, combined streams, parallel workers, Dask, and
+batches cut short by Ctrl-C or a killed worker (only complete outputs left; ``--skip-existing`` finishes)."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from conftest import _make_video
+from logpolar_track.batch import VideoInput, find_videos, plan_batch, read_roi_file, run_batch
+from logpolar_track.cli import main
+from logpolar_track.errors import UsageError
+from logpolar_track.executor import DASK_HINT
+from logpolar_track.geometry import Ellipse
+from logpolar_track.results import COLUMNS
+
+LPTRACK = [sys.executable, "-m", "logpolar_track"]
+
+
+def invoke(*args: str, stdin: str | None = None):
+    return CliRunner().invoke(main, ["run", *map(str, args)], input=stdin, catch_exceptions=False)
+
+
+def csv_rows(path_or_text) -> list[dict]:
+    text = Path(path_or_text).read_text() if isinstance(path_or_text, Path) else path_or_text
+    return list(csv.DictReader(io.StringIO(text)))
+
+
+def files_under(folder: Path) -> list[str]:
+    """Every file under ``folder`` (hidden temporary ones included), as sorted relative paths."""
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())
+
+
+@pytest.fixture(scope="module")
+def footage(tmp_path_factory) -> Path:
+    """footage/day1/{a.mp4 (20 frames), b.mp4 (24)}, footage/day2/{c.avi (16), cut.avi (truncated),
+    notes.mp4 (not a video)}, each with a .roi sidecar."""
+    root = tmp_path_factory.mktemp("batch") / "footage"
+    (root / "day1").mkdir(parents=True)
+    (root / "day2").mkdir()
+    _make_video(root / "day1", "a.mp4", n_frames=20, seed=1)
+    _make_video(root / "day1", "b.mp4", n_frames=24, seed=2)
+    _make_video(root / "day2", "c.avi", n_frames=16, seed=3)
+    whole = _make_video(root / "day2", "cut.avi", n_frames=30, seed=4).path
+    data = whole.read_bytes()
+    whole.write_bytes(data[: len(data) // 2])  # MJPG AVI cut in half: FFmpeg reads the frames before the cut
+    (root / "day2" / "notes.mp4").write_text("not a video\n")
+    (root / "day2" / "notes.roi").write_text("80,60,20\n")
+    return root
+
+
+@pytest.fixture
+def work(tmp_path, monkeypatch, footage) -> Path:
+    """A fresh current folder holding a copy of ``footage``."""
+    shutil.copytree(footage, tmp_path / "footage")
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+GOOD = {"day1/a": 20, "day1/b": 24, "day2/c": 16}
+
+
+def test_folder_with_bad_videos_completes_the_good_ones(work):
+    result = invoke("footage", "--out-dir", "out", "--no-video", "--jobs", "1")
+    assert result.exit_code == 1
+    outputs = files_under(work / "out")
+    assert outputs == ["day1/a.lptrack.csv", "day1/b.lptrack.csv", "day2/c.lptrack.csv", "day2/cut.lptrack.csv"]
+    for name, n in GOOD.items():
+        rows = csv_rows(work / "out" / f"{name}.lptrack.csv")
+        assert len(rows) == n and rows[0]["status"] == "init"
+    cut_rows = len(csv_rows(work / "out" / "day2/cut.lptrack.csv"))
+    assert 0 < cut_rows < 30
+    err = result.stderr
+    assert "lptrack: 5 videos: 4 ok, 1 failed;" in err
+    assert re.search(r"lptrack: failed: footage/day2/notes\.mp4: cannot read .* as a video", err)
+    assert f"footage/day2/cut.avi: ended after {cut_rows} of the 30 frames" in err
+    assert "Traceback" not in err
+
+
+def test_stdin_paths_and_one_combined_csv_stream(work):
+    paths = "\n".join(["footage/day1/b.mp4", "", "# a comment", "footage/day1/a.mp4", "footage/missing.mp4"])
+    result = invoke("-", "--csv", "-", "--no-video", "--jobs", "1", stdin=paths + "\n")
+    assert result.exit_code == 1
+    assert result.stdout.count("video,frame,") == 1
+    rows = csv_rows(result.stdout)
+    assert list(rows[0]) == ["video", *COLUMNS]
+    # Rows of each video together, in input order.
+    assert [r["video"] for r in rows] == ["footage/day1/b.mp4"] * 24 + ["footage/day1/a.mp4"] * 20
+    assert "lptrack: failed: footage/missing.mp4: video" in result.stderr and "not found" in result.stderr
+    assert sorted(os.listdir(work)) == ["footage"]  # no files: the data went to stdout
+
+
+def test_jsonl_stream_holds_the_same_rows(work):
+    as_csv = invoke("footage/day1", "--csv", "-", "--no-video", "--jobs", "1")
+    as_json = invoke("footage/day1", "--csv", "-", "--no-video", "--jobs", "1", "--format", "jsonl")
+    assert as_csv.exit_code == as_json.exit_code == 0
+    records = [json.loads(line) for line in as_json.stdout.splitlines()]
+    rows = csv_rows(as_csv.stdout)
+    assert len(records) == len(rows) == 44
+    for record, row in zip(records, rows):
+        assert list(record) == ["video", *COLUMNS]
+        assert record["video"] == row["video"] and record["status"] == row["status"]
+        assert record["frame"] == int(row["frame"]) and record["cx"] == float(row["cx"])
+
+
+def test_roi_file_relative_paths_start_frame_and_tracker(work):
+    lists = work / "lists"
+    lists.mkdir()
+    (lists / "rois.csv").write_text(
+        "video,roi,start_frame,tracker\n"
+        "../footage/day1/a.mp4,\"80,60,20\",0,fixed\n"
+        "# b starts later, with the default tracker; its ROI is unquoted\n"
+        "../footage/day1/b.mp4,80,60,20,5\n")
+    result = invoke("--roi-file", lists / "rois.csv", "--out-dir", "out", "--no-video", "--jobs", "1")
+    assert result.exit_code == 0, result.stderr
+    assert files_under(work / "out") == ["a.lptrack.csv", "b.lptrack.csv"]
+    a_rows, b_rows = csv_rows(work / "out/a.lptrack.csv"), csv_rows(work / "out/b.lptrack.csv")
+    assert len(a_rows) == 20 and len(b_rows) == 24 - 5 and b_rows[0]["frame"] == "5"
+    # The ROI file wins over the sidecar, and --roi is the fallback for videos it does not list.
+    (work / "footage/day1/a.roi").write_text("10,10,5\n")
+    result = invoke("footage/day1", "--roi-file", lists / "rois.csv", "--roi", "81,61,20", "--csv", "-",
+                    "--no-video", "--jobs", "1")
+    firsts = {r["video"]: r for r in csv_rows(result.stdout) if r["status"] == "init"}
+    assert firsts["footage/day1/a.mp4"]["cx"] == "80.000"
+    assert firsts["footage/day1/b.mp4"]["frame"] == "5"
+
+
+def test_roi_file_parsing(tmp_path):
+    (tmp_path / "v.mp4").touch()
+    text = ("clip.mp4,\"320,240,60,30,15\"\n"
+            "/abs/other.mp4,1,2,3,,lpcf\n"
+            "third.mp4,1,2,3,4,5,7\n")
+    (tmp_path / "r.csv").write_text(text)
+    entries = read_roi_file(tmp_path / "r.csv")
+    assert [e.video for e in entries] == [tmp_path / "clip.mp4", Path("/abs/other.mp4"), tmp_path / "third.mp4"]
+    assert entries[0].roi == Ellipse(320, 240, 60, 30, 15) and entries[0].start_frame is None
+    assert entries[1].tracker == "lpcf" and entries[1].roi == Ellipse.circle(1, 2, 3)
+    assert entries[2].start_frame == 7 and entries[2].roi == Ellipse(1, 2, 3, 4, 5)
+    for bad, fragment in (("a.mp4,1,2\n", "line 1: expected video,roi"),
+                          ("a.mp4,1,2,3\nb.mp4,1,2,3,x,y\n", "line 2"),
+                          ("a.mp4,1,2,3,nosuch\n", "unknown tracker 'nosuch'"),
+                          ("a.mp4,1,2,3\na.mp4,4,5,6\n", "already listed on line 1")):
+        (tmp_path / "bad.csv").write_text(bad)
+        with pytest.raises(UsageError, match=re.escape(fragment)):
+            read_roi_file(tmp_path / "bad.csv")
+
+
+def test_bad_roi_file_is_a_usage_error(work):
+    (work / "rois.csv").write_text("footage/day1/a.mp4,80,60\n")
+    result = invoke("--roi-file", "rois.csv", "--no-video")
+    assert result.exit_code == 2
+    assert result.stderr.startswith("lptrack: error: ROI file 'rois.csv' line 1: expected video,roi")
+
+
+def test_find_videos_sorts_and_skips_outputs_and_hidden_files(tmp_path):
+    for name in ("b/x.mp4", "a.MOV", "a.txt", ".hidden.mp4", "b/x.lptrack.mp4", ".cache/y.mp4", "b/.x.1.part.mp4"):
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).touch()
+    found = find_videos([str(tmp_path), str(tmp_path / "a.MOV"), "-"], stdin=io.StringIO("\n"))
+    assert found == [VideoInput(tmp_path / "a.MOV", tmp_path), VideoInput(tmp_path / "b/x.mp4", tmp_path)]
+
+
+def test_outputs_never_collide(work):
+    shutil.copy(work / "footage/day2/c.avi", work / "footage/day2/a.avi")
+    (work / "footage/day2/a.roi").write_text("80,60,20\n")
+    plan = plan_batch(find_videos(["footage/day1/a.mp4", "footage/day2/a.avi", "footage/day1/b.mp4"]),
+                      video=True, out_dir="out")
+    names = [(j.video_out.relative_to(work / "out"), j.csv_out.relative_to(work / "out")) for j in plan.jobs]
+    assert names == [(Path("day1/a.lptrack.mp4"), Path("day1/a.lptrack.csv")),
+                     (Path("day2/a.lptrack.mp4"), Path("day2/a.lptrack.csv")),
+                     (Path("day1/b.lptrack.mp4"), Path("day1/b.lptrack.csv"))]
+    plan = plan_batch([VideoInput(Path("footage/day2/a.avi")), VideoInput(Path("footage/day2/c.avi"))] +
+                      [VideoInput(Path("footage/day2/a.mp4"))], out_dir="out")
+    assert [j.csv_out.name for j in plan.jobs] == ["a.avi.lptrack.csv", "c.lptrack.csv", "a.mp4.lptrack.csv"]
+    # Two folders holding the same relative name: the second cannot have the first's outputs.
+    (work / "again/day1").mkdir(parents=True)
+    shutil.copy(work / "footage/day1/a.mp4", work / "again/day1/a.mp4")
+    plan = plan_batch(find_videos(["footage", "again"]), roi=Ellipse.circle(80, 60, 20), out_dir="out")
+    assert plan.settled["again/day1/a.mp4"].status == "failed"
+    assert "would overwrite those of 'footage/day1/a.mp4'" in plan.settled["again/day1/a.mp4"].reason
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (("footage/day1", "--out", "x.mp4"), "--out names one video's output"),
+    (("footage/day1", "--csv", "all.csv"), "--csv names one video's output"),
+    (("footage/day1", "--csv", "-", "--skip-existing"), "--skip-existing needs outputs in files"),
+    (("footage/day1", "--overwrite", "--skip-existing"), "contradict each other"),
+    ((), "give a VIDEO"),
+    (("footage/day1", "--jobs", "0"), "--jobs"),
+])
+def test_bad_batch_arguments(work, args, fragment):
+    result = invoke(*args)
+    assert result.exit_code == 2
+    assert result.stderr.startswith("lptrack: error:") and fragment in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_video_without_roi_and_roi_outside_frame_fail_alone(work):
+    (work / "footage/day1/a.roi").unlink()
+    (work / "footage/day1/b.roi").write_text("500,500,20\n")
+    (work / "footage/day2").rename(work / "elsewhere")
+    result = invoke("footage", "--no-video", "--out-dir", "out", "--jobs", "1")
+    assert result.exit_code == 1
+    assert "footage/day1/a.mp4: no ROI given" in result.stderr
+    assert "footage/day1/b.mp4: ROI centre" in result.stderr or "footage/day1/b.mp4: " in result.stderr
+    assert "2 videos: 0 ok, 2 failed" in result.stderr
+    assert not (work / "out").exists() or files_under(work / "out") == []
+
+
+def test_jobs_2_writes_the_same_bytes_as_jobs_1(work):
+    one = invoke("footage/day1", "footage/day2/c.avi", "--out-dir", "one", "--jobs", "1")
+    two = invoke("footage/day1", "footage/day2/c.avi", "--out-dir", "two", "--jobs", "2")
+    assert one.exit_code == two.exit_code == 0, two.stderr
+    # Videos found in a folder mirror their path below it; files named directly go to the top.
+    assert files_under(work / "one") == files_under(work / "two") == [
+        "a.lptrack.csv", "a.lptrack.mp4", "b.lptrack.csv", "b.lptrack.mp4", "c.lptrack.csv", "c.lptrack.mp4"]
+    for name in files_under(work / "one"):
+        if name.endswith(".csv"):
+            assert (work / "one" / name).read_bytes() == (work / "two" / name).read_bytes(), name
+
+
+def test_dask_local_cluster_gives_the_same_csvs(work):
+    distributed = pytest.importorskip("dask.distributed")
+    local = invoke("footage/day1", "--out-dir", "local", "--no-video", "--jobs", "1")
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, protocol="tcp",
+                                  host="127.0.0.1", dashboard_address=None) as cluster:
+        on_dask = invoke("footage/day1", "--out-dir", "dask", "--no-video", "--scheduler",
+                         cluster.scheduler_address)
+        with distributed.Client(cluster) as client:  # the library takes a connected client too
+            plan = plan_batch(find_videos(["footage/day2"]), out_dir="api", video=False)
+            summary = run_batch(plan, scheduler=client)
+    assert local.exit_code == on_dask.exit_code == 0, on_dask.stderr
+    for name in ("a.lptrack.csv", "b.lptrack.csv"):
+        assert (work / "local" / name).read_bytes() == (work / "dask" / name).read_bytes()
+    assert [o.status for o in summary.outcomes] == ["ok", "ok", "failed"]
+
+
+def test_scheduler_without_dask_gives_a_hint(work, monkeypatch):
+    monkeypatch.setitem(sys.modules, "dask.distributed", None)  # import fails as if the extra were missing
+    result = invoke("footage/day1", "--no-video", "--scheduler", "tcp://127.0.0.1:8786")
+    assert result.exit_code == 2
+    assert result.stderr == f"lptrack: error: {DASK_HINT}\n"
+
+
+def test_skip_existing_resumes(work):
+    first = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1")
+    assert first.exit_code == 0
+    (work / "out/b.lptrack.csv").unlink()
+    stamp = (work / "out/a.lptrack.csv").stat().st_mtime_ns
+    again = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1", "--skip-existing")
+    assert again.exit_code == 0
+    assert "2 videos: 1 ok, 1 skipped (outputs exist), 0 failed" in again.stderr
+    assert (work / "out/a.lptrack.csv").stat().st_mtime_ns == stamp
+    assert len(csv_rows(work / "out/b.lptrack.csv")) == 24
+    refused = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1")
+    assert refused.exit_code == 1 and "already exists; use --overwrite" in refused.stderr
+
+
+# -- batches cut short --------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def long_footage(tmp_path_factory) -> Path:
+    """Four 320x240 clips of 120 frames: long enough to interrupt a batch while it writes."""
+    root = tmp_path_factory.mktemp("long") / "in"
+    root.mkdir()
+    for i in range(4):
+        _make_video(root, f"v{i}.mp4", n_frames=120, size=(320, 240), radius=30, seed=i)
+    return root
+
+
+def _start_and_wait_for_a_temporary_file(long_footage, out: Path, *extra: str):
+    """Start a 2-job batch with video output; return (process, pid of the worker writing the first temp file)."""
+    process = subprocess.Popen([*LPTRACK, "run", str(long_footage), "--out-dir", str(out), "--jobs", "2",
+                                "--tracker", "spatial", *extra], stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        temporary = list(out.glob(".*.part.*")) if out.exists() else []
+        if temporary:
+            return process, int(re.search(r"\.(\d+)\.part\.", temporary[0].name).group(1))
+        if process.poll() is not None:
+            break
+        time.sleep(0.02)
+    process.kill()
+    pytest.fail("the batch never wrote a temporary output")
+
+
+def _complete(out: Path) -> list[str]:
+    """Output files; every CSV among them holds all 120 rows (nothing half-written under a final name)."""
+    names = files_under(out)
+    for name in names:
+        assert not name.startswith(".") and ".part." not in name, f"temporary file left: {name}"
+        if name.endswith(".csv"):
+            assert len(csv_rows(out / name)) == 120, name
+    return names
+
+
+ALL_OUTPUTS = sorted(f"v{i}.lptrack.{ext}" for i in range(4) for ext in ("csv", "mp4"))
+
+
+@pytest.mark.parametrize("how", ["SIGINT", "SIGTERM"])
+def test_interrupted_batch_leaves_only_complete_outputs_and_resumes(long_footage, tmp_path, how):
+    out = tmp_path / "out"
+    process, _ = _start_and_wait_for_a_temporary_file(long_footage, out)
+    process.send_signal(getattr(signal, how))
+    _, err = process.communicate(timeout=30)
+    assert process.returncode == 130, err
+    assert "lptrack: interrupted" in err and "Traceback" not in err
+    assert len(_complete(out)) < len(ALL_OUTPUTS)
+    resumed = subprocess.run([*LPTRACK, "run", str(long_footage), "--out-dir", str(out), "--jobs", "2",
+                              "--tracker", "spatial", "--skip-existing"], capture_output=True, text=True)
+    assert resumed.returncode == 0, resumed.stderr
+    assert _complete(out) == ALL_OUTPUTS
+
+
+def test_killed_worker_costs_only_its_video(long_footage, tmp_path):
+    out = tmp_path / "out"
+    process, worker = _start_and_wait_for_a_temporary_file(long_footage, out)
+    os.kill(worker, signal.SIGKILL)
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == 1, err
+    assert "4 videos: 3 ok, 1 failed" in err
+    assert re.search(r"lptrack: failed: .*v\d\.mp4: worker process was killed \(SIGKILL\)", err)
+    assert len(_complete(out)) == len(ALL_OUTPUTS) - 2
+    resumed = subprocess.run([*LPTRACK, "run", str(long_footage), "--out-dir", str(out), "--tracker", "spatial",
+                              "--skip-existing", "--jobs", "2"], capture_output=True, text=True)
+    assert resumed.returncode == 0 and "3 skipped (outputs exist)" in resumed.stderr
+    assert _complete(out) == ALL_OUTPUTS

@@ -24,23 +24,25 @@ def _orientation_channels(gray: np.ndarray, n_orient: int, blur_sigma: float) ->
     magnitude, angle = cv2.cartToPolar(gx, gy)
     # Unsigned orientation: angle mod pi. cartToPolar's angle lies in [0, 2 pi], so subtracting pi where it is
     # at least pi (at most twice) is exactly the float modulo, and much cheaper than numpy's ``%``.
-    for _ in range(2):
-        np.subtract(angle, _PI, out=angle, where=angle >= _PI)
-    position = angle * np.float32(n_orient / np.pi)
-    floor = np.floor(position)
-    upper_weight = position - floor
+    np.subtract(angle, _PI, out=angle, where=angle >= _PI)
+    np.subtract(angle, _PI, out=angle, where=angle >= _PI)
+    angle *= np.float32(n_orient / np.pi)  # position in bins, 0 to n_orient
+    floor = np.floor(angle)
+    angle -= floor  # the share of the upper bin
     lower = floor.astype(np.intp).ravel()
     lower[lower >= n_orient] -= n_orient
-    upper = lower + 1
-    upper[upper == n_orient] = 0
     # Each pixel's magnitude goes to its two neighbouring bins (linear interpolation), the others stay 0.
-    channels = np.zeros(gray.shape + (n_orient,), np.float32)
+    height, width = gray.shape
+    channels = np.zeros((height, width, n_orient), np.float32)
     flat = channels.reshape(-1)
     base = np.arange(0, flat.size, n_orient)
-    flat[base + lower] = (magnitude * (1 - upper_weight)).ravel()
-    flat[base + upper] = (magnitude * upper_weight).ravel()
+    to_upper = magnitude * angle
+    flat[base + lower] = (magnitude - to_upper).ravel()
+    lower += 1
+    lower[lower == n_orient] = 0
+    flat[base + lower] = to_upper.ravel()
     cv2.GaussianBlur(channels, (0, 0), blur_sigma, dst=channels)
-    return channels, magnitude.mean() + np.float32(1e-3)
+    return channels, np.float32(cv2.mean(magnitude)[0] + 1e-3)
 
 
 def gradient_channels(gray: np.ndarray, n_orient: int = 6, blur_sigma: float = 1.0) -> np.ndarray:
@@ -57,12 +59,12 @@ def patch_features(gray: np.ndarray, n_orient: int = 6, window: np.ndarray | Non
     """Features of a grey patch: ``(1 + n_orient, H, W)`` float32, grey normalised to zero mean, unit std.
 
     ``window`` (``(H, W)`` float32), if given, multiplies every channel (e.g. a Hann window before an FFT);
-    folding it in here saves a pass over the channels.
+    it is folded into the normalisation, which saves a pass over the channels.
     """
     channels, norm = _orientation_channels(gray, n_orient, 1.0)
+    mean, std = cv2.meanStdDev(gray)
+    weight = np.ones(gray.shape, np.float32) if window is None else window
     out = np.empty((1 + n_orient,) + gray.shape, np.float32)
-    out[0] = (gray - gray.mean()) / (gray.std() + 1e-3)
-    np.divide(channels.transpose(2, 0, 1), norm, out=out[1:])
-    if window is not None:
-        out *= window
+    np.multiply(gray - np.float32(mean[0, 0]), weight / np.float32(std[0, 0] + 1e-3), out=out[0])
+    np.multiply(channels.transpose(2, 0, 1), weight / norm, out=out[1:])
     return out

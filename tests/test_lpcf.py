@@ -70,3 +70,30 @@ def test_confidence_drops_on_a_swapped_object_and_recovers():
     assert all(s.ellipse == good.ellipse for _, s in results[14:17])
     # Nothing of the stranger was learnt: tracking resumes on the object.
     assert np.median(centre_errors(results[20:], poses[21:])) <= 1.0
+
+
+def test_packed_spectra_match_numpy_fft():
+    """The tracker's packed (cv2.dft CCS) correlation equals NumPy's complex arithmetic up to float32 rounding."""
+    from logpolar_track.trackers.lpcf import _PackedSpectra
+
+    rng = np.random.default_rng(3)
+    for h, w in [(64, 64), (52, 64), (64, 22)]:
+        packed = _PackedSpectra(h, w)
+        x, a = rng.standard_normal((2, 3, h, w)).astype(np.float32)
+        spec_x, spec_a = np.fft.rfft2(x.astype(np.float64)), np.fft.rfft2(a.astype(np.float64))
+        px, pa = packed.forward(x), packed.forward(a)
+        response = packed.correlate(packed.multiplier(pa), px)
+        expected = np.fft.irfft2((spec_a * spec_x).sum(axis=0), s=(h, w))
+        assert np.allclose(response, expected, atol=1e-4 * np.abs(expected).max())
+        # Division by the summed power, as the filter does.
+        power = packed.power(pa)
+        response = packed.correlate(packed.multiplier(pa / (power + 1.0)), px)
+        expected = np.fft.irfft2((spec_a * spec_x).sum(axis=0) / ((np.abs(spec_a) ** 2).sum(axis=0) + 1.0), s=(h, w))
+        assert np.allclose(response, expected, atol=1e-4 * np.abs(expected).max())
+        # An even image's spectrum, ready to multiply conj(x): label * conj(x).
+        ys, xs = np.fft.fftfreq(h, 1.0 / h)[:, None], np.fft.fftfreq(w, 1.0 / w)[None, :]
+        label = np.exp(-(xs ** 2 + ys ** 2) / 8.0)
+        learnt = packed.real_spectrum(label) * px
+        got = packed.correlate(packed.multiplier(learnt), px)
+        expected = np.fft.irfft2((np.fft.rfft2(label) * np.conj(spec_x) * spec_x).sum(axis=0), s=(h, w))
+        assert np.allclose(got, expected, atol=1e-4 * np.abs(expected).max())

@@ -37,7 +37,7 @@ import numpy as np
 
 from ..features import patch_features
 from ..geometry import Ellipse
-from ..logpolar import LogPolarGrid, PhaseCorrelator, find_peaks, rfft2_float32
+from ..logpolar import LogPolarGrid, PhaseCorrelator
 from .base import Similarity, SimilarityTracker, register
 
 
@@ -113,7 +113,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         ys = np.fft.fftfreq(ny, 1.0 / ny)[:, None]
         xs = np.fft.fftfreq(nx, 1.0 / nx)[None, :]
         label = np.exp(-(xs ** 2 + ys ** 2) / (2 * sigma ** 2))
-        self.label_spec = np.fft.rfft2(label).astype(np.complex64)
+        self.spectra = _PackedSpectra(ny, nx)
+        # The label is even, so its spectrum is real; stored ready to multiply conj(features) (see _PackedSpectra).
+        self.label_conj = self.spectra.real_spectrum(label)
 
         self.grid = LogPolarGrid(roi.a, roi.b, n_rho=self.n_rho, n_theta=self.n_theta, inner_px=2.0)
         self.correlator = PhaseCorrelator((self.n_rho, self.n_theta))
@@ -127,8 +129,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.frame_size = gray.shape[1], gray.shape[0]
         first = Similarity(roi.cx, roi.cy, 1.0, 0.0, 1.0)
         spec = self._feature_spectrum(gray, first)
-        self.numerator = self.label_spec[None] * np.conj(spec)
-        self.denominator = (spec * np.conj(spec)).real.sum(axis=0)
+        self.numerator = self.label_conj * spec
+        self.denominator = self.spectra.power(spec)
+        self._filter()
         self.lp_model = self._log_polar(gray, first)
         self.lp_anchor = self.lp_model.copy()
         self._lp_references()
@@ -183,9 +186,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
 
     def _translate(self, gray, state: Similarity) -> tuple[Similarity, float, float]:
         """Correlate the filter with a patch around ``state``; returns the moved state, PSR and peak value."""
-        spec = self._feature_spectrum(gray, state)
-        response_spec = (self.numerator * spec).sum(axis=0) / (self.denominator + self.regularisation)
-        response = np.fft.irfft2(response_spec, s=self.size[::-1])
+        response = self.spectra.correlate(self._filter_parts, self._feature_spectrum(gray, state))
         dy, dx, peak, psr = _peak_and_psr(response)
         motion = _rotate_screen(np.array([dx, dy]) * self.step * state.scale, state.rotation_deg)
         moved = Similarity(state.cx + motion[0], state.cy + motion[1], state.scale, state.rotation_deg, peak)
@@ -225,12 +226,11 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             surface = (1 - self.anchor_weight) * surfaces[0] + self.anchor_weight * surfaces[1]
         # A motion prior: per frame, objects change size and angle a little; a distant peak is more likely a
         # deformation or the background than a real jump.
-        peak = find_peaks(surface * self.lp_prior)
-        height = float(peak.height)
+        d_rho, d_theta, height = _surface_peak(surface * self.lp_prior)
         if height < self.lp_min_height:
             return state, height
-        log_scale = float(peak.d_rho) * self.grid.log_step
-        rotation = float(peak.d_theta) * self.grid.degrees_per_bin
+        log_scale = d_rho * self.grid.log_step
+        rotation = d_theta * self.grid.degrees_per_bin
         log_scale = float(np.clip(log_scale, -self.max_scale_step, self.max_scale_step))
         rotation = float(np.clip(rotation, -self.max_rotation_step, self.max_rotation_step))
         return Similarity(state.cx, state.cy, state.scale * math.exp(log_scale), state.rotation_deg + rotation,
@@ -239,12 +239,17 @@ class LogPolarCorrelationTracker(SimilarityTracker):
     def _learn(self, gray, state: Similarity, lp_height: float) -> None:
         spec = self._feature_spectrum(gray, state)
         rate = self.learning_rate
-        self.numerator = (1 - rate) * self.numerator + rate * self.label_spec[None] * np.conj(spec)
-        self.denominator = (1 - rate) * self.denominator + rate * (spec * np.conj(spec)).real.sum(axis=0)
+        self.numerator = (1 - rate) * self.numerator + rate * self.label_conj * spec
+        self.denominator = (1 - rate) * self.denominator + rate * self.spectra.power(spec)
+        self._filter()
         if lp_height >= self.lp_min_height:
             self.lp_model = (1 - self.lp_learning_rate) * self.lp_model + self.lp_learning_rate * self._log_polar(
                 gray, state)
             self._lp_references()
+
+    def _filter(self) -> None:
+        """The filter ``numerator / (denominator + regularisation)``, ready for :meth:`_PackedSpectra.correlate`."""
+        self._filter_parts = self.spectra.multiplier(self.numerator / (self.denominator + self.regularisation))
 
     def _lp_references(self) -> None:
         """Spectra of the log-polar model and anchor, computed once per change rather than once per use."""
@@ -304,11 +309,96 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         return blurred, x0, y0
 
     def _feature_spectrum(self, gray, state: Similarity) -> np.ndarray:
-        return rfft2_float32(patch_features(self._patch(gray, state), window=self.window))
+        return self.spectra.forward(patch_features(self._patch(gray, state), window=self.window))
 
     def _log_polar(self, gray, state: Similarity) -> np.ndarray:
-        angle = self.roi.angle_deg + state.rotation_deg
-        return self.grid.sample(gray, np.array([[state.cx, state.cy]]), state.scale, angle)[0]
+        """Log-polar image at ``state`` (``LogPolarGrid.sample`` for one centre, with the maps made by
+        ``cv2.addWeighted`` from the grid's offsets: equal up to float rounding, a third of the cost)."""
+        psi = math.radians(self.roi.angle_deg + state.rotation_deg)
+        c, s = state.scale * math.cos(psi), state.scale * math.sin(psi)
+        u, v = self.grid.offsets
+        map_x = cv2.addWeighted(u, c, v, -s, state.cx, dtype=cv2.CV_32F)
+        map_y = cv2.addWeighted(u, -s, v, -c, state.cy, dtype=cv2.CV_32F)
+        return cv2.remap(gray, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+
+class _PackedSpectra:
+    """Multi-channel correlation in OpenCV's packed real spectra (CCS), for ``h x w`` images, both even.
+
+    ``cv2.dft`` of a real image returns its half spectrum packed into an ``h x w`` real array: most bins are
+    a (re, im) pair -- adjacent along the row in columns 1 to w-2, adjacent down the column in columns 0 and
+    w-1 -- and the four corners are real. It is about twice as fast as NumPy's real FFT on these sizes.
+    A complex product ``a * x`` of packed spectra is, position by position, ``U * x + V * swap(x)``, where
+    ``swap`` exchanges the members of every pair, ``U`` holds ``re(a)`` at both members and ``V`` holds
+    ``-im(a)`` at the real member and ``+im(a)`` at the imaginary one. A filter ``a`` is turned once into
+    ``(U, swap(V))`` (:meth:`multiplier`); then the response ``sum_c a_c * x_c`` costs two channel sums over
+    contiguous arrays and the swap of one image (:meth:`correlate`).
+    """
+
+    def __init__(self, h: int, w: int):
+        self.shape = (h, w)
+        index = np.arange(h * w).reshape(h, w)
+        swapped = index.copy()
+        for (re, im), (index_re, index_im) in zip(self._pairs(swapped), self._pairs(index)):
+            re[...], im[...] = index_im, index_re
+        self.swap = swapped.ravel()
+        #: +1 at real members of pairs and at the real corners, -1 at imaginary members: packed ``conj``.
+        self.conj_sign = np.ones((h, w), np.float32)
+        for _, im in self._pairs(self.conj_sign):
+            im[...] = -1.0
+
+    @staticmethod
+    def _pairs(x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Views of the real and imaginary members of the pairs of packed spectra ``x`` (..., h, w)."""
+        w = x.shape[-1]
+        edges = x[..., ::w - 1]  # columns 0 and w-1
+        return [(x[..., 1:-1:2], x[..., 2:-1:2]), (edges[..., 1:-1:2, :], edges[..., 2:-1:2, :])]
+
+    def forward(self, images: np.ndarray) -> np.ndarray:
+        """Packed spectra ``(C, h, w)`` float32 of real images ``(C, h, w)``."""
+        out = np.empty(images.shape, np.float32)
+        for image, spectrum in zip(images, out):
+            if image.dtype == np.float32:
+                cv2.dft(image, dst=spectrum)
+            else:
+                spectrum[:] = cv2.dft(image)
+        return out
+
+    def multiplier(self, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(U, swap(V))`` of packed spectra ``a`` ``(C, h, w)``, each flattened to ``(C, h w)``."""
+        u, v_swapped = a.copy(), np.zeros_like(a)
+        for (re, im), (_, u_im), (v_re, v_im) in zip(self._pairs(a), self._pairs(u), self._pairs(v_swapped)):
+            u_im[...] = re
+            v_re[...] = im  # swap(V) holds +im(a) at the real member...
+            np.negative(im, out=v_im)  # ...and -im(a) at the imaginary one
+        return u.reshape(len(a), -1), v_swapped.reshape(len(a), -1)
+
+    def correlate(self, parts: tuple[np.ndarray, np.ndarray], spectra: np.ndarray) -> np.ndarray:
+        """Real image ``sum_c a_c * x_c`` (inverse DFT, scaled like ``numpy.fft.irfft2``) of the filter
+        ``parts`` (:meth:`multiplier`) and packed ``spectra`` ``(C, h, w)``."""
+        u, v_swapped = parts
+        x = spectra.reshape(len(spectra), -1)
+        # swap(V) * x summed over channels, then swapped, equals the sum of V * swap(x).
+        packed = (u * x).sum(axis=0) + (v_swapped * x).sum(axis=0)[self.swap]
+        return cv2.idft(packed.reshape(self.shape), flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE)
+
+    def power(self, x: np.ndarray) -> np.ndarray:
+        """``sum_c |x_c|^2`` ``(h, w)`` of packed spectra ``(C, h, w)``, at both members of every pair (so
+        that packed spectra can be divided by it)."""
+        out = (x * x).sum(axis=0)
+        for re, im in self._pairs(out):
+            re += im
+            im[...] = re
+        return out
+
+    def real_spectrum(self, image: np.ndarray) -> np.ndarray:
+        """Packed spectrum of a real image that is even (``f(-y, -x) = f(y, x)``, circularly), whose spectrum
+        is therefore real: its values, at both members of every pair, times :attr:`conj_sign`, so that
+        ``result * x`` is the packed ``spectrum * conj(x)``."""
+        packed = cv2.dft(np.asarray(image, np.float64))
+        for re, im in self._pairs(packed):
+            im[...] = re
+        return (packed * self.conj_sign).astype(np.float32)
 
 
 #: Extra pixels around a blurred crop, so that the learning step's patch can reuse it (see ``_blurred``).
@@ -333,31 +423,45 @@ def _rotate_screen(vector: np.ndarray, angle_deg: float) -> np.ndarray:
 def _peak_and_psr(response: np.ndarray, exclude: int = 5) -> tuple[float, float, float, float]:
     """Signed sub-sample peak position ``(dy, dx)``, peak value and peak-to-sidelobe ratio of a response."""
     ny, nx = response.shape
-    idx = int(np.argmax(response))
-    r, c = divmod(idx, nx)
+    r, c = divmod(int(response.argmax()), nx)
     peak = float(response[r, c])
-    dr = _log_parabola(response[(r - 1) % ny, c], peak, response[(r + 1) % ny, c])
-    dc = _log_parabola(response[r, (c - 1) % nx], peak, response[r, (c + 1) % nx])
+    dr = _log_parabola(float(response[r - 1, c]), peak, float(response[(r + 1) % ny, c]))
+    dc = _log_parabola(float(response[r, c - 1]), peak, float(response[r, (c + 1) % nx]))
     dy = (r + dr + ny / 2) % ny - ny / 2
     dx = (c + dc + nx / 2) % nx - nx / 2
-    # Mean and spread of the response outside the (2 exclude + 1)^2 block around the peak (wrapping around),
-    # from sums over the whole response minus the block's, in float64.
-    offsets = np.arange(-exclude, exclude + 1)
     if 2 * exclude + 1 > min(ny, nx):
         return dy, dx, peak, float("nan")
+    # Mean and spread of the response outside the (2 exclude + 1)^2 block around the peak (wrapping around),
+    # from sums over the whole response minus the block's, in float64.
     values = response.astype(np.float64)
-    block = values[np.ix_((r + offsets) % ny, (c + offsets) % nx)]
+    span = np.arange(-exclude, exclude + 1)
+    block = values.take(r + span, axis=0, mode="wrap").take(c + span, axis=1, mode="wrap").ravel()
     count = values.size - block.size
     flat = values.ravel()
     mean = (flat.sum() - block.sum()) / count
-    var = max((flat @ flat - np.vdot(block, block)) / count - mean * mean, 0.0)
+    var = max((flat @ flat - block @ block) / count - mean * mean, 0.0)
     return dy, dx, peak, (peak - mean) / (math.sqrt(var) + 1e-9)
 
 
 def _log_parabola(left: float, centre: float, right: float) -> float:
     if centre <= 0 or left <= 0 or right <= 0:
         denom = left - 2 * centre + right
-        return float(np.clip(0.5 * (left - right) / denom, -0.5, 0.5)) if denom < 0 else 0.0
+        return min(max(0.5 * (left - right) / denom, -0.5), 0.5) if denom < 0 else 0.0
     ll, lc, lr = math.log(left), math.log(centre), math.log(right)
     denom = ll - 2 * lc + lr
-    return float(np.clip(0.5 * (ll - lr) / denom, -0.5, 0.5)) if denom < 0 else 0.0
+    return min(max(0.5 * (ll - lr) / denom, -0.5), 0.5) if denom < 0 else 0.0
+
+
+def _surface_peak(surface: np.ndarray) -> tuple[float, float, float]:
+    """Signed sub-bin peak ``(d_rho, d_theta)`` and height (clipped to [0, 1]) of one log-polar correlation
+    surface: :func:`logpolar.find_peaks` for a single surface, in scalar arithmetic (a fraction of its cost)."""
+    n_rho, n_theta = surface.shape
+    k, j = divmod(int(surface.argmax()), n_theta)
+    centre = float(surface[k, j])
+    dk = _log_parabola(max(float(surface[k - 1, j]), 1e-4), max(centre, 1e-4),
+                       max(float(surface[(k + 1) % n_rho, j]), 1e-4))
+    dj = _log_parabola(max(float(surface[k, j - 1]), 1e-4), max(centre, 1e-4),
+                       max(float(surface[k, (j + 1) % n_theta]), 1e-4))
+    d_rho = (k + dk + n_rho / 2) % n_rho - n_rho / 2
+    d_theta = (j + dj + n_theta / 2) % n_theta - n_theta / 2
+    return d_rho, d_theta, min(max(centre, 0.0), 1.0)

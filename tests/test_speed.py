@@ -4,12 +4,13 @@
 from __future__ import annotations
 
 import json
+import os
 
 import pytest
 from click.testing import CliRunner
 
 from logpolar_track.cli import main
-from logpolar_track.speed import THESIS_SECONDS, format_report, frames_from_environment
+from logpolar_track.speed import THESIS_SECONDS, format_report, frames_from_environment, pin_to_one_cpu, unpin
 
 SPEED_ENV = {"LPTRACK_SPEED_FRAMES": "6"}
 
@@ -45,7 +46,7 @@ def test_speed_json_to_stdout_table_to_stderr():
     row = doc["trackers"][0]
     assert (row["thesis_circle_s"], row["thesis_ellipse_s"]) == THESIS_SECONDS["fixed"]
     assert row["circle_ms"] > 0 and row["ellipse_ms"] > 0
-    assert doc["one_core"]["cv2_threads"] == 1
+    assert doc["one_core"]["cv2_threads"] == 1 and "pinned_cpu" in doc["one_core"]
     e2e = doc["end_to_end"]
     assert e2e["frames"] == 6 and e2e["tracker"] == "lpcf"
     for key in ("decode_ms", "decode_encode_ms", "run_no_video_ms", "run_video_ms"):
@@ -107,3 +108,14 @@ def test_format_report_marks_missing_figures_and_verdicts():
     assert peer.endswith("| - | - | - |")  # no thesis figure, no speed-up, no target
     assert "| run --no-video (lpcf) | 4.00 | 250 | 25% of decode only | >= 50% of decode only: NOT met |" in text
     assert "| run with video (lpcf) | 3.00 | 333 | 67% of decode + encode | >= 50% of decode + encode: met |" in text
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="no thread affinity on this platform")
+def test_pinning_to_one_cpu_is_undone():
+    before = os.sched_getaffinity(0)
+    cpu, previous = pin_to_one_cpu()
+    try:
+        assert cpu in before and os.sched_getaffinity(0) == {cpu}
+    finally:
+        unpin(previous)
+    assert os.sched_getaffinity(0) == before

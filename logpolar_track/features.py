@@ -14,35 +14,40 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-_PI = np.float32(np.pi)
-
-
 def _orientation_channels(gray: np.ndarray, n_orient: int, blur_sigma: float) -> tuple[np.ndarray, np.float32]:
     """Blurred oriented gradient energy, pixel-major ``(H, W, n_orient)`` float32, and the mean magnitude."""
     gx = cv2.Sobel(gray, cv2.CV_32F, 1, 0, ksize=3)
     gy = cv2.Sobel(gray, cv2.CV_32F, 0, 1, ksize=3)
     magnitude, angle = cv2.cartToPolar(gx, gy)
-    # Unsigned orientation: angle mod pi. cartToPolar's angle lies in [0, 2 pi], so subtracting pi where it is
-    # at least pi (at most twice) is exactly the float modulo, and much cheaper than numpy's ``%``.
-    np.subtract(angle, _PI, out=angle, where=angle >= _PI)
-    np.subtract(angle, _PI, out=angle, where=angle >= _PI)
-    angle *= np.float32(n_orient / np.pi)  # position in bins, 0 to n_orient
+    # Position in bins over the full circle (cartToPolar's angle is 0 to 2 pi): 0 to 2 n_orient. Orientation
+    # is unsigned, so bin b and bin b + n_orient are the same; lookup tables fold them (cheaper than ``%``).
+    angle *= np.float32(n_orient / np.pi)
     floor = np.floor(angle)
     angle -= floor  # the share of the upper bin
-    lower = floor.astype(np.intp).ravel()
-    lower[lower >= n_orient] -= n_orient
+    lower_bin, upper_bin = _bin_tables(n_orient)
+    whole = floor.astype(np.intp).ravel()
     # Each pixel's magnitude goes to its two neighbouring bins (linear interpolation), the others stay 0.
     height, width = gray.shape
     channels = np.zeros((height, width, n_orient), np.float32)
     flat = channels.reshape(-1)
     base = np.arange(0, flat.size, n_orient)
     to_upper = magnitude * angle
-    flat[base + lower] = (magnitude - to_upper).ravel()
-    lower += 1
-    lower[lower == n_orient] = 0
-    flat[base + lower] = to_upper.ravel()
+    flat[base + lower_bin[whole]] = (magnitude - to_upper).ravel()
+    flat[base + upper_bin[whole]] = to_upper.ravel()
     cv2.GaussianBlur(channels, (0, 0), blur_sigma, dst=channels)
     return channels, np.float32(cv2.mean(magnitude)[0] + 1e-3)
+
+
+def _bin_tables(n_orient: int) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper unsigned bin of each whole position 0 .. 2 n_orient on the full circle."""
+    tables = _BIN_TABLES.get(n_orient)
+    if tables is None:
+        whole = np.arange(2 * n_orient + 1)
+        tables = _BIN_TABLES[n_orient] = (whole % n_orient, (whole + 1) % n_orient)
+    return tables
+
+
+_BIN_TABLES: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
 
 def gradient_channels(gray: np.ndarray, n_orient: int = 6, blur_sigma: float = 1.0) -> np.ndarray:

@@ -97,3 +97,19 @@ def test_packed_spectra_match_numpy_fft():
         got = packed.correlate(packed.multiplier(learnt), px)
         expected = np.fft.irfft2((np.fft.rfft2(label) * np.conj(spec_x) * spec_x).sum(axis=0), s=(h, w))
         assert np.allclose(got, expected, atol=1e-4 * np.abs(expected).max())
+
+
+def test_packed_phase_correlation_matches_phase_correlator():
+    """The tracker's packed log-polar correlation gives PhaseCorrelator's surface up to float32 rounding."""
+    from logpolar_track.logpolar import PhaseCorrelator
+    from logpolar_track.trackers.lpcf import _PackedPhaseCorrelator
+
+    rng = np.random.default_rng(4)
+    reference = rng.random((32, 64)).astype(np.float32)
+    image = np.roll(reference, (2, -5), axis=(0, 1)) + 0.1 * rng.random((32, 64)).astype(np.float32)
+    correlator = PhaseCorrelator((32, 64))
+    packed = _PackedPhaseCorrelator(correlator)
+    expected = correlator.correlate(correlator.spectrum(reference[None]), correlator.spectrum(image[None]))[0]
+    got = packed.correlate(packed.reference(reference), packed.spectrum(image))
+    assert np.unravel_index(np.argmax(got), got.shape) == (2, 64 - 5)
+    assert np.allclose(got, expected, atol=1e-5)

@@ -22,6 +22,13 @@ This is the structure of LDES (Li, Zhu, Hoi, Hoi, Zhu, "Robust estimation of sim
 visual object tracking", AAAI 2019), with a simpler filter, and of the thesis' future work (decoupled
 translation, motion prediction, drift-free updates).
 
+Speed: a frame costs four feature patches (three correlations and the learning step, which reuses the third's
+blurred crop) and two log-polar matches. Where the time goes (one core, 640x480, radius 50, about 2 ms a
+frame): the anti-aliasing blur of the patch's crop (about a third), the seven feature channels (a fifth), their
+DFTs (a sixth, in OpenCV's packed real spectra, see ``_PackedSpectra``), and the caller's whole-frame grey
+conversion (under a tenth). Each shortcut here keeps the numbers of the straightforward implementation up to
+float32 rounding.
+
 References
 ----------
 .. [1] D. S. Bolme et al., "Visual object tracking using adaptive correlation filters", CVPR 2010 (MOSSE).

@@ -44,8 +44,8 @@ def readout_text(state: TrackState, *, frame_index: int | None = None, status: s
 def draw_state(frame: np.ndarray, state: TrackState, *, frame_index: int | None = None,
                status: str = "tracked", colour: tuple[int, int, int] = TRACKED_COLOUR,
                lost_colour: tuple[int, int, int] = LOST_COLOUR, thickness: int | None = None,
-               text: bool = True) -> np.ndarray:
-    """An annotated copy of ``frame`` showing ``state``.
+               text: bool = True, in_place: bool = False) -> np.ndarray:
+    """An annotated copy of ``frame`` showing ``state`` (or ``frame`` itself, annotated, if ``in_place``).
 
     Draws the ellipse outline, a line from the centre to the end of axis ``a`` (it turns with the object,
     so rotation is visible) and, if ``text``, a readout of frame, scale, rotation and score in the top-left
@@ -54,7 +54,7 @@ def draw_state(frame: np.ndarray, state: TrackState, *, frame_index: int | None 
     Parameters
     ----------
     frame : ndarray
-        BGR (H, W, 3) or grey (H, W) uint8 image; not modified.
+        BGR (H, W, 3) or grey (H, W) uint8 image; not modified unless ``in_place``.
     state : TrackState
         Ellipse in pixels (x right, y down), angle in degrees counter-clockwise on screen.
     frame_index : int, optional
@@ -67,18 +67,24 @@ def draw_state(frame: np.ndarray, state: TrackState, *, frame_index: int | None 
         Line thickness in pixels; default scales with the frame size (1 px up to ~500 px frames).
     text : bool
         Draw the readout.
+    in_place : bool
+        Draw on a BGR ``frame`` itself instead of a copy (a video writer's loop saves one frame of memory,
+        which matters at 4K).
 
     Returns
     -------
     ndarray
-        New BGR uint8 image of the same height and width.
+        BGR uint8 image of the same height and width: new, or ``frame`` if drawn in place.
 
     Notes
     -----
     OpenCV's ``ellipse`` angle is measured clockwise on screen (y down), lptrack's counter-clockwise, hence
     the negated angle.
     """
-    out = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR) if frame.ndim == 2 else frame.copy()
+    if frame.ndim == 2:
+        out = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+    else:
+        out = frame if in_place else frame.copy()
     height, width = out.shape[:2]
     size = min(height, width)
     line = thickness if thickness is not None else max(1, int(round(size / 480)))

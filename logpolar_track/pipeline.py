@@ -304,8 +304,9 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
                 if csv_writer is not None:
                     csv_writer.write(result)
                 if video_writer is not None:
+                    # The tracker is done with the frame: annotate it in place rather than a copy.
                     video_writer.write(draw_state(frame, result.state, frame_index=result.frame,
-                                                  status=result.status))
+                                                  status=result.status, in_place=True))
                 frames += 1
                 lost += result.lost
                 step(frames)

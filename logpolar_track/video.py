@@ -98,7 +98,7 @@ class VideoReader:
     A reader can be iterated once.
     """
 
-    def __init__(self, path, *, start_frame: int = 0, read_ahead: int = 4):
+    def __init__(self, path, *, start_frame: int = 0, read_ahead: int = 1):
         self.path = Path(path)
         if start_frame < 0:
             raise VideoError(f"start frame must be >= 0, got {start_frame}")

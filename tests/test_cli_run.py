@@ -139,10 +139,10 @@ def test_roi_partly_over_the_border_still_tracks(make_video, tmp_path, workdir):
 def test_interrupt_exits_130_and_leaves_nothing(tiny_video, workdir, monkeypatch):
     real_draw = pipeline.draw_state
 
-    def draw_then_interrupt(frame, state, *, frame_index, status):
+    def draw_then_interrupt(frame, state, *, frame_index, status, **options):
         if frame_index == 5:
             raise KeyboardInterrupt
-        return real_draw(frame, state, frame_index=frame_index, status=status)
+        return real_draw(frame, state, frame_index=frame_index, status=status, **options)
 
     monkeypatch.setattr(pipeline, "draw_state", draw_then_interrupt)
     result = invoke(tiny_video.path)

@@ -26,6 +26,7 @@ from multiprocessing.connection import wait
 from typing import Any, Callable, Iterator, Sequence
 
 from .errors import LptrackError, UsageError
+from .video import keep_frames_off_the_heap
 
 #: Seconds between progress messages a worker process sends (finer updates are dropped).
 PROGRESS_INTERVAL_S = 0.25
@@ -146,6 +147,7 @@ def _worker_main(connection, function, item) -> None:
     """Body of a worker process: run one task, send ``("progress", n)`` messages then one final message."""
     # SIGTERM from the parent (its Ctrl-C) unwinds like Ctrl-C, so the task deletes its temporary outputs.
     signal.signal(signal.SIGTERM, _interrupt)
+    keep_frames_off_the_heap()
     last = 0.0
 
     def report(done: int) -> None:

@@ -18,6 +18,8 @@ import os
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
 
+import ctypes  # noqa: E402
+import ctypes.util  # noqa: E402
 import queue  # noqa: E402
 import threading  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -220,6 +222,24 @@ class VideoReader:
                 self._queue.get_nowait()
             except queue.Empty:
                 break
+
+
+def keep_frames_off_the_heap(threshold_bytes: int = 1 << 20) -> None:
+    """Fix glibc's mmap threshold so every frame-sized buffer is returned to the system when freed.
+
+    glibc raises the threshold after each large block is freed, so after the first few video frames, frames
+    (25 MB each at 4K) come from the heap, which fragments and keeps peak memory 40-60 MB higher (measured on
+    a 4K run). Process-wide, so called by the processes lptrack owns (the CLI, batch workers), not on import.
+    No effect outside glibc.
+    """
+    name = ctypes.util.find_library("c")
+    if not name or os.environ.get("MALLOC_MMAP_THRESHOLD_"):
+        return
+    try:
+        libc = ctypes.CDLL(name)
+        libc.mallopt(-3, threshold_bytes)  # M_MMAP_THRESHOLD
+    except (OSError, AttributeError):
+        pass  # not glibc (musl, macOS): nothing to tune
 
 
 def _fourcc_text(code: str) -> int:

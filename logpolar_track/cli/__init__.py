@@ -13,36 +13,17 @@ import os
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
 
-import ctypes  # noqa: E402
-import ctypes.util  # noqa: E402
-
 import click  # noqa: E402
 
 from .. import __version__  # noqa: E402
 from ..errors import LptrackError, RoiError, UsageError  # noqa: E402
 from ..geometry import ROI_SYNTAX, Ellipse, parse_roi  # noqa: E402
+from ..video import keep_frames_off_the_heap  # noqa: E402
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
-def _keep_frames_off_the_heap(threshold_bytes: int = 1 << 20) -> None:
-    """Fix glibc's mmap threshold so every frame-sized buffer is returned to the system when freed.
-
-    glibc raises the threshold after each large block is freed, so after the first few video frames, frames
-    (25 MB each at 4K) come from the heap, which fragments and keeps peak memory 40-60 MB higher (measured on
-    a 4K run). No effect outside glibc.
-    """
-    name = ctypes.util.find_library("c")
-    if not name or os.environ.get("MALLOC_MMAP_THRESHOLD_"):
-        return
-    try:
-        libc = ctypes.CDLL(name)
-        libc.mallopt(-3, threshold_bytes)  # M_MMAP_THRESHOLD
-    except (OSError, AttributeError):
-        pass  # not glibc (musl, macOS): nothing to tune
-
-
-_keep_frames_off_the_heap()
+keep_frames_off_the_heap()  # the CLI owns its process; a library import does not tune malloc
 
 
 class LptrackGroup(click.Group):

@@ -136,6 +136,21 @@ def test_run_bench_in_processes_keeps_order_and_numbers(dataset):
     assert {r["sequence"]: r["iou"] for r in again} == mil
 
 
+def test_bench_on_a_dask_cluster_gives_the_same_numbers(dataset):
+    distributed = pytest.importorskip("dask.distributed")
+    local = _run("bench", "--dataset", dataset, "--trackers", "fixed", "--json", "-", "-q")
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, protocol="tcp",
+                                  host="127.0.0.1", dashboard_address=None) as cluster:
+        remote = _run("bench", "--dataset", dataset, "--trackers", "fixed", "--json", "-", "-q",
+                      "--scheduler", cluster.scheduler_address)
+    assert local.exit_code == remote.exit_code == 0, remote.stderr
+    local_doc, remote_doc = json.loads(local.stdout), json.loads(remote.stdout)
+    assert remote_doc["parameters"]["scheduler"] == cluster.scheduler_address
+    for a, b in zip(local_doc["results"], remote_doc["results"]):
+        assert (a["sequence"], a["auc"], a["centre_error_median_px"]) == (b["sequence"], b["auc"],
+                                                                         b["centre_error_median_px"])
+
+
 def test_unknown_tracker_is_a_usage_error(dataset):
     res = _run("bench", "--dataset", dataset, "--trackers", "fixed,nosuch")
     assert res.exit_code == 2 and "unknown tracker 'nosuch'" in res.stderr

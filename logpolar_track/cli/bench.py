@@ -11,17 +11,7 @@ import click
 from ..bench import (bench_document, collect_sequences, default_dataset, eval_document, format_table,
                      matplotlib_missing, plot_curves, resolve_trackers, run_bench, summarise, write_text_atomic)
 from ..errors import UsageError
-from . import EXIT_FAILURE, main
-
-
-class _OneLineErrors(click.Command):
-    """A command whose argument errors are one ``lptrack: error:`` line (exit 2), not click's usage block."""
-
-    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
-        try:
-            return super().parse_args(ctx, args)
-        except click.UsageError as exc:
-            raise UsageError(f"{exc.format_message()} (see 'lptrack {self.name} --help')") from None
+from . import EXIT_FAILURE, OneLineErrors, main
 
 
 _BENCH_EPILOG = """\b
@@ -55,7 +45,7 @@ Examples:
 """
 
 
-@main.command("bench", cls=_OneLineErrors, epilog=_BENCH_EPILOG)
+@main.command("bench", cls=OneLineErrors, epilog=_BENCH_EPILOG)
 @click.option("--dataset", "datasets", multiple=True, metavar="DIR",
               type=click.Path(exists=True, path_type=Path),
               help="Folder of sequences (repeatable). Default: sample_videos/ of the project.")
@@ -69,13 +59,16 @@ Examples:
               help="Save success and precision plots (needs matplotlib: pip install 'lptrack[plot]').")
 @click.option("--jobs", type=click.IntRange(min=1), default=1, show_default=True, metavar="N",
               help="Run (sequence, tracker) pairs in N processes. Speeds are only comparable at equal N.")
+@click.option("--scheduler", metavar="ADDRESS",
+              help="Run the pairs on this Dask scheduler instead (pip install 'lptrack[dask]'; the sequences "
+                   "at the same paths on its workers).")
 @click.option("--speed", is_flag=True,
               help="Time the trackers instead (thesis Table 4.1 on a 640x480 synthetic video, one core) with "
                    "decode and 'lptrack run' baselines; uses --trackers, --json and --quiet only. "
                    "LPTRACK_SPEED_FRAMES sets the frames per sequence (default 100).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no notes on stderr.")
 def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None, per_frame: bool,
-          plot_out: Path | None, jobs: int, quiet: bool, speed: bool) -> None:
+          plot_out: Path | None, jobs: int, scheduler: str | None, quiet: bool, speed: bool) -> None:
     """Run trackers over sequences with ground truth and compare them.
 
     Prints one row per sequence and tracker and a mean row per tracker:
@@ -123,13 +116,14 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
             bar.update(1)
 
     try:
-        results = run_bench(sequences, names, jobs=jobs, on_result=progress)
+        results = run_bench(sequences, names, jobs=jobs, scheduler=scheduler, on_result=progress)
     finally:
         if bar is not None:
             bar.close()
     summary = summarise(results, names)
     table = format_table(results, summary)
-    parameters = {"datasets": [str(d) for d in datasets], "trackers": names, "jobs": jobs}
+    parameters = {"datasets": [str(d) for d in datasets], "trackers": names, "jobs": jobs,
+                  "scheduler": scheduler}
     failed = [r for r in results if r["error"]]
     if json_out is not None:
         doc = bench_document(results, summary, sequences, parameters=parameters, skipped=skipped,
@@ -181,7 +175,7 @@ def _speed(trackers: str | None, json_out: str | None, quiet: bool) -> None:
     click.echo(table, nl=False)
 
 
-@main.command("eval", cls=_OneLineErrors)
+@main.command("eval", cls=OneLineErrors)
 @click.argument("prediction", metavar="PRED.csv", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.argument("ground_truth", metavar="GT", type=click.Path(exists=True, path_type=Path))
 @click.option("--json", "json_out", metavar="PATH|-", help="Write the metrics (and per-frame arrays) as JSON; "

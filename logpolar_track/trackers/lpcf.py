@@ -45,7 +45,7 @@ import numpy as np
 from ..features import patch_features
 from ..geometry import Ellipse
 from ..logpolar import LogPolarGrid, PhaseCorrelator
-from .base import Similarity, SimilarityTracker, register
+from .base import Similarity, SimilarityTracker, TrackState, register
 
 
 @register
@@ -149,8 +149,16 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.match_level = 1.0  # the first frame matches itself perfectly
         self.cursor = first
         self.misses = 0
+        self._blur_cache = None  # the first frame is not needed any more
 
     # -- per frame ---------------------------------------------------------------------------------------
+    def update(self, frame: np.ndarray) -> tuple[bool, TrackState]:
+        try:
+            return super().update(frame)
+        finally:
+            # A frame's blurred crop is reused within the frame, never after: let the frame go (33 MB at 4K).
+            self._blur_cache = None
+
     def _estimate(self, gray: np.ndarray, last: Similarity) -> Similarity | None:
         # Search from the tracker's own latest estimate, even when it was reported lost (the report keeps the
         # last good geometry): an object that only looked unlike itself for a few frames is followed on.

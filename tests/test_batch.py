@@ -207,6 +207,14 @@ def test_bad_batch_arguments(work, args, fragment):
     assert len(result.stderr.strip().splitlines()) == 1
 
 
+def test_folder_without_videos_is_a_usage_error(work):
+    (work / "empty").mkdir()
+    (work / "rois.csv").write_text("footage/day1/a.mp4,80,60,20\n")
+    for args in (("empty",), ("empty", "--roi-file", "rois.csv")):
+        result = invoke(*args, "--roi", "80,60,20")
+        assert result.exit_code == 2 and result.stderr == "lptrack: error: no videos found in 'empty'\n"
+
+
 def test_video_without_roi_and_roi_outside_frame_fail_alone(work):
     (work / "footage/day1/a.roi").unlink()
     (work / "footage/day1/b.roi").write_text("500,500,20\n")

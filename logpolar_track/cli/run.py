@@ -174,7 +174,7 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
         raise UsageError("--skip-existing needs outputs in files; it cannot apply to --csv -")
     entries = read_roi_file(roi_file) if roi_file is not None else []
     inputs = find_videos(videos)
-    if not inputs and not entries:
+    if videos and not inputs:  # without VIDEO arguments the ROI file's videos are the inputs
         raise UsageError(f"no videos found in {', '.join(repr(v) for v in videos)}")
     plan = plan_batch(inputs, roi=roi, roi_entries=entries, tracker=tracker, start_frame=start_frame,
                       out_dir=out_dir or ".", video=not no_video, stream=stream, data_format=data_format,

@@ -319,7 +319,8 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         Return each video's rows (labelled with a ``video`` column) instead of writing data files.
     data_format : {'csv', 'jsonl'}
     overwrite, skip_existing : bool
-        Replace existing outputs; or leave alone every video whose outputs all exist (status ``skipped``).
+        Replace existing outputs; or leave alone every video whose outputs all exist (status ``skipped``) and
+        redo the others, replacing whatever part of their outputs exists.
     """
     entries = {e.video.resolve(): e for e in roi_entries}
     if not videos:
@@ -343,8 +344,9 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         job = VideoJob(label=label, video=item.path.resolve(), roi=entry.roi if entry else roi,
                        tracker=(entry.tracker if entry and entry.tracker else tracker),
                        start_frame=(entry.start_frame if entry and entry.start_frame is not None else start_frame),
-                       video_out=video_out, csv_out=csv_out, data_format=data_format, overwrite=overwrite,
-                       stream=stream)
+                       video_out=video_out, csv_out=csv_out, data_format=data_format,
+                       # A partial set (a run killed between its two renames) is redone whole.
+                       overwrite=overwrite or skip_existing, stream=stream)
         clash = next((claimed[p] for p in (video_out, csv_out) if p is not None and p in claimed), None)
         if clash is not None:
             settled[label] = VideoOutcome(label, "failed", f"its outputs would overwrite those of '{clash}'; "

@@ -272,6 +272,12 @@ def test_skip_existing_resumes(work):
     assert "2 videos: 1 ok, 1 skipped (outputs exist), 0 failed" in again.stderr
     assert (work / "out/a.lptrack.csv").stat().st_mtime_ns == stamp
     assert len(csv_rows(work / "out/b.lptrack.csv")) == 24
+    # Partial sets of outputs (here: a's video without its CSV, b's CSV without its video) are redone whole.
+    (work / "out/a.lptrack.csv").unlink()
+    (work / "out/a.lptrack.mp4").write_bytes(b"earlier")
+    redone = invoke("footage/day1", "--out-dir", "out", "--jobs", "1", "--skip-existing")
+    assert redone.exit_code == 0 and "2 ok" in redone.stderr
+    assert (work / "out/a.lptrack.mp4").read_bytes() != b"earlier"
     refused = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1")
     assert refused.exit_code == 1 and "already exists; use --overwrite" in refused.stderr
 

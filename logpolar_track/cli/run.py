@@ -132,7 +132,8 @@ Examples:
 @click.option("--no-video", is_flag=True, help="Do not write annotated videos (faster).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 @click.option("--skip-existing", is_flag=True,
-              help="Leave alone videos whose outputs all exist (resumes an interrupted batch).")
+              help="Leave alone videos whose outputs all exist; redo the others (resumes an interrupted "
+                   "batch).")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=None, metavar="N",
               help="Videos tracked in parallel processes. Default: the number of cores.")
 @click.option("--scheduler", metavar="ADDRESS",
@@ -210,7 +211,8 @@ def _run_one(video: Path, roi, *, tracker: str, start_frame: int, video_out: Pat
         return
     try:
         summary = run_video(video, roi, tracker=tracker, start_frame=start_frame,
-                            video_out=None if no_video else video_out, csv_out=csv_out, overwrite=overwrite,
+                            video_out=None if no_video else video_out, csv_out=csv_out,
+                            overwrite=overwrite or skip_existing,
                             progress=show and sys.stderr.isatty(), csv_options={"data_format": data_format})
     except BrokenPipeError:
         _stdout_closed()

@@ -95,12 +95,7 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
             raise UsageError("no --dataset given and no sample_videos/ folder found beside the package or in "
                              "the current folder; give --dataset DIR")
         datasets = (found,)
-    names, skipped = resolve_trackers(trackers)
-    if not quiet:
-        for name, reason in skipped:
-            click.echo(f"lptrack: note: skipping {name}: {reason}", err=True)
-    if not names:
-        raise UsageError("none of the requested trackers can run here")
+    names, skipped = _runnable_trackers(trackers, quiet)
     sequences = collect_sequences(datasets)
 
     show_progress = not quiet and sys.stderr.isatty()
@@ -125,18 +120,9 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
     parameters = {"datasets": [str(d) for d in datasets], "trackers": names, "jobs": jobs,
                   "scheduler": scheduler}
     failed = [r for r in results if r["error"]]
-    if json_out is not None:
-        doc = bench_document(results, summary, sequences, parameters=parameters, skipped=skipped,
-                             per_frame=per_frame)
-        text = json.dumps(doc, indent=1) + "\n"
-        if json_out == "-":
-            click.echo(table, err=True, nl=False)
-            sys.stdout.write(text)
-            sys.stdout.flush()
-        else:
-            write_text_atomic(json_out, text)
-    if json_out != "-":
-        click.echo(table, nl=False)
+    doc = None if json_out is None else bench_document(results, summary, sequences, parameters=parameters,
+                                                       skipped=skipped, per_frame=per_frame)
+    _emit(table, doc, json_out)
     if plot_out is not None:
         plot_curves(summary, plot_out)
     for r in failed:
@@ -153,17 +139,28 @@ def _speed(trackers: str | None, json_out: str | None, quiet: bool) -> None:
         n_frames = frames_from_environment()
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    names, skipped = resolve_trackers(trackers)
-    if not quiet:
-        for name, reason in skipped:
-            click.echo(f"lptrack: note: skipping {name}: {reason}", err=True)
-    if not names:
-        raise UsageError("none of the requested trackers can run here")
+    names, skipped = _runnable_trackers(trackers, quiet)
     show = not quiet and sys.stderr.isatty()
     doc = speed_report(names, n_frames=n_frames,
                        on_step=(lambda label: click.echo(f"lptrack: timing {label}", err=True)) if show else None)
     doc["skipped_trackers"] = [{"tracker": n, "reason": why} for n, why in skipped]
     table = format_report(doc)
+    _emit(table, doc, json_out)
+
+
+def _runnable_trackers(spec: str | None, quiet: bool) -> tuple[list[str], list[tuple[str, str]]]:
+    """The requested trackers that can run here, and (name, reason) for those skipped, noted on stderr."""
+    names, skipped = resolve_trackers(spec)
+    if not quiet:
+        for name, reason in skipped:
+            click.echo(f"lptrack: note: skipping {name}: {reason}", err=True)
+    if not names:
+        raise UsageError("none of the requested trackers can run here")
+    return names, skipped
+
+
+def _emit(table: str, doc: dict | None, json_out: str | None) -> None:
+    """The table on stdout and the JSON document to ``json_out``; with ``--json -`` the table goes to stderr."""
     if json_out is not None:
         text = json.dumps(doc, indent=1) + "\n"
         if json_out == "-":

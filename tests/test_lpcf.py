@@ -34,7 +34,7 @@ def test_is_the_default():
 
 def test_counter_clockwise_turn_is_positive():
     """A 10 degree counter-clockwise turn (cv2.getRotationMatrix2D's positive angle) in a single frame reads
-    positive; the motion prior reads a jump that large only partly in one frame (about 7.6 degrees)."""
+    positive; the motion prior reads a jump that large only partly in one frame (about 7.8 degrees)."""
     rng = np.random.default_rng(5)
     frame = random_texture(240, 320, rng)
     m = cv2.getRotationMatrix2D((160.0, 120.0), 10.0, 1.0)
@@ -159,9 +159,10 @@ def test_recovers_after_a_full_occlusion():
 
 def test_accuracy_on_a_gentle_similarity_path():
     """The default tracker on a generated sequence: 120 frames of 640x480, circle of radius 50, the centre
-    circling 60 px, scale 0.8-1.25, half a turn. Bounds as measured, with margin; the issue's targets for
-    scale (1.5 %) and rotation (1 degree) are not met: a deliberately strong motion prior, which keeps real
-    sequences from drifting, makes the tracker lag a steady zoom."""
+    circling 60 px, scale 0.8-1.25, half a turn. Bounds: the issue's targets for scale (1.5 %) and, with
+    margin, rotation (measured: median scale error 0.65 %, rotation 0.20 degrees, centre 0.56 px). The motion
+    prior that keeps real sequences from drifting would lag this steady zoom (3.9 %, 1.0 degree) if the
+    near-perfect log-polar matches of a rigid texture were not read without it (``trust_low``)."""
     roi = Ellipse.circle(320, 240, 50)
     poses = similarity_path(120, (320, 240), scale_range=(0.8, 1.25), turns=0.5, radius_px=60)
     frames = list(synthetic_sequence(poses, roi, seed=3))
@@ -173,5 +174,5 @@ def test_accuracy_on_a_gentle_similarity_path():
     assert all(ok for ok, _ in results)
     assert np.mean(errors < 0.25 * roi.radius * np.array([p.scale for p in truth])) >= 0.98
     assert np.median(errors) <= 1.0
-    assert np.median(scale_errors) <= 0.06
-    assert np.median(rotation_errors) <= 1.5
+    assert np.median(scale_errors) <= 0.015
+    assert np.median(rotation_errors) <= 0.5

@@ -10,7 +10,7 @@ Per frame:
    (MOSSE/DSST closed form). The response peak, refined to sub-sample precision, gives the displacement.
 3. **Scale and rotate**: sample a log-polar image over the object's ellipse at the new centre and
    phase-correlate it with the log-polar appearance model: the peak's shift gives the change of scale and
-   rotation. Because step 2 worked in the object's frame, translation no longer corrupts this step, and
+   rotation, shrunk by a motion prior unless the match is near-perfect. Because step 2 worked in the object's frame, translation no longer corrupts this step, and
    because this step keeps the frame aligned, the filter in step 2 sees an upright, constant-size object.
 4. **Refine**: repeat step 2 once in the corrected frame.
 5. **Judge and learn**: the filter's peak-to-sidelobe ratio (PSR) decides whether the object was found.
@@ -74,6 +74,17 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         Log-polar peak height below which scale and rotation are left unchanged for the frame.
     max_scale_step, max_rotation_step : float
         Largest accepted change per frame (fraction, degrees); larger ones are clipped.
+    scale_sigma, rotation_sigma : float
+        Widths of the Gaussian motion prior on the per-frame change (natural log of scale, degrees) that
+        weights the log-polar match surface before its peak is read.
+    trust_low, trust_high : float
+        Log-polar peak heights (0 to 1) between which the sub-bin offset is read increasingly from the raw
+        match surface instead of the prior-weighted one (the prior still picks the bin). A weak peak (real,
+        deforming objects: median height 0.2-0.7) is shrunk towards no change, which keeps scale from running
+        away; a near-perfect one (rigid texture: 0.8-0.95) is believed, so steady zooms and turns do not lag.
+        Measured with 0.7 / 0.9 against no trust: sample_videos mean IoU AUC 0.904 -> 0.933, median scale
+        error 2.5 -> 1.2 %, rotation 2.0 -> 1.0 deg; the 7 real sequences 0.386 -> 0.397 (0.342 -> 0.346
+        averaged over 5 shifted/scaled initial ROIs each); trusting every peak fully gave 0.224 there.
     """
 
     name = "lpcf"
@@ -88,7 +99,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
                  max_rotation_step: float = 20.0, regularisation: float = 1e-2, label_sigma: float = 0.1,
                  velocity_damping: float = 0.8, window_power: float = 1.0,
                  scale_sigma: float = 0.05, rotation_sigma: float = 10.0, anchor_weight: float = 0.0, iterations: int = 2,
-                 level_rate: float = 0.1, redetect_after: int = 5):
+                 level_rate: float = 0.1, redetect_after: int = 5, trust_low: float = 0.7, trust_high: float = 0.9):
         super().__init__(lost_threshold=lost_threshold)
         self.padding = float(padding)
         self.patch_samples = int(patch_samples)
@@ -107,6 +118,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.iterations = max(1, int(iterations))
         self.level_rate = float(level_rate)
         self.redetect_after = int(redetect_after)
+        self.trust_low, self.trust_high = float(trust_low), float(trust_high)
 
     # -- set-up -----------------------------------------------------------------------------------------
     def _start(self, gray: np.ndarray, roi: Ellipse) -> None:
@@ -231,8 +243,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         """Change of scale and angle from the log-polar match at ``state``'s centre, and the match height.
 
         The match surface is weighted by the motion prior before its peak is read (a MAP estimate): a weak,
-        broad peak -- deformation, clutter -- moves the estimate only part of the way, a sharp one nearly all
-        of it, and the next iteration reads the remainder.
+        broad peak -- deformation, clutter -- moves the estimate only part of the way, and the next iteration
+        reads part of the remainder. The prior's bins are 10 % of scale apart at the default sizes, so this
+        shrinks even a clean measurement to a fraction of its size; a high peak (``trust_low`` to
+        ``trust_high``) therefore has its sub-bin offset read on the raw surface.
         """
         image = self._log_polar(gray, state)
         # Against the learnt model (follows appearance) and the first frame's image (cannot drift): a model
@@ -248,7 +262,14 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             surface = (1 - self.anchor_weight) * surfaces[0] + self.anchor_weight * surfaces[1]
         # A motion prior: per frame, objects change size and angle a little; a distant peak is more likely a
         # deformation or the background than a real jump.
-        d_rho, d_theta, height = _surface_peak(surface * self.lp_prior)
+        weighted = surface * self.lp_prior
+        d_rho, d_theta, height = _surface_peak(weighted)
+        # How far to believe the raw surface: a near-perfect match is a rigid change, not a deformation.
+        trust = min(max((height - self.trust_low) / (self.trust_high - self.trust_low), 0.0), 1.0)
+        if trust > 0.0:
+            raw_rho, raw_theta, _ = _surface_peak(weighted, surface)
+            d_rho += trust * (raw_rho - d_rho)
+            d_theta += trust * (raw_theta - d_theta)
         if height < self.lp_min_height:
             return state, height
         log_scale = d_rho * self.grid.log_step
@@ -523,11 +544,14 @@ def _log_parabola(left: float, centre: float, right: float) -> float:
     return min(max(0.5 * (ll - lr) / denom, -0.5), 0.5) if denom < 0 else 0.0
 
 
-def _surface_peak(surface: np.ndarray) -> tuple[float, float, float]:
+def _surface_peak(surface: np.ndarray, values: np.ndarray | None = None) -> tuple[float, float, float]:
     """Signed sub-bin peak ``(d_rho, d_theta)`` and height (clipped to [0, 1]) of one log-polar correlation
-    surface: :func:`logpolar.find_peaks` for a single surface, in scalar arithmetic (a fraction of its cost)."""
+    surface: :func:`logpolar.find_peaks` for a single surface, in scalar arithmetic (a fraction of its cost).
+    With ``values``, the bin is ``surface``'s maximum but the sub-bin offset and height are read on ``values``."""
     n_rho, n_theta = surface.shape
     k, j = divmod(int(surface.argmax()), n_theta)
+    if values is not None:
+        surface = values
     centre = float(surface[k, j])
     dk = _log_parabola(max(float(surface[k - 1, j]), 1e-4), max(centre, 1e-4),
                        max(float(surface[(k + 1) % n_rho, j]), 1e-4))

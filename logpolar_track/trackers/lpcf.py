@@ -10,8 +10,9 @@ Per frame:
    (MOSSE/DSST closed form). The response peak, refined to sub-sample precision, gives the displacement.
 3. **Scale and rotate**: sample a log-polar image over the object's ellipse at the new centre and
    phase-correlate it with the log-polar appearance model: the peak's shift gives the change of scale and
-   rotation, shrunk by a motion prior unless the match is near-perfect. Because step 2 worked in the object's frame, translation no longer corrupts this step, and
-   because this step keeps the frame aligned, the filter in step 2 sees an upright, constant-size object.
+   rotation, shrunk by a motion prior unless the match is near-perfect. Because step 2 worked in the
+   object's frame, translation no longer corrupts this step, and because this step keeps the frame aligned,
+   the filter in step 2 sees an upright, constant-size object.
 4. **Refine**: repeat step 2 once in the corrected frame.
 5. **Judge and learn**: the filter's peak-to-sidelobe ratio (PSR) decides whether the object was found.
    Only confident frames update the filter and the log-polar model (running averages), so occluders and

@@ -127,11 +127,15 @@ def rfft2_float32(images: np.ndarray) -> np.ndarray:
     return out
 
 
-def to_gray(frame: np.ndarray) -> np.ndarray:
-    """A BGR or grey uint8 frame as a float32 grey image (0 to 255); the input is not modified."""
+def to_gray(frame: np.ndarray, dtype=np.float32) -> np.ndarray:
+    """A BGR or grey uint8 frame as a grey image (0 to 255) of ``dtype``; the input is not modified.
+
+    ``dtype=np.uint8`` keeps OpenCV's grey conversion as it is (a quarter of the memory of float32, which
+    matters at 4K) for trackers that convert only the regions they read.
+    """
     if frame.ndim == 3:
-        frame = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-    return frame.astype(np.float32)
+        return cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY).astype(dtype, copy=False)
+    return frame.astype(dtype)
 
 
 class PhaseCorrelator:

@@ -79,10 +79,14 @@ class Similarity:
 class SimilarityTracker(Tracker):
     """Shared bookkeeping of lptrack's own trackers, which estimate a similarity transform per frame.
 
-    Subclasses implement :meth:`_start` and :meth:`_estimate` on a float32 grey frame; this class turns their
-    estimates into :class:`TrackState`, marks frames whose score is below ``lost_threshold`` as lost, and keeps
-    the last good state for them.
+    Subclasses implement :meth:`_start` and :meth:`_estimate` on a grey frame (:attr:`gray_dtype`); this class
+    turns their estimates into :class:`TrackState`, marks frames whose score is below ``lost_threshold`` as
+    lost, and keeps the last good state for them.
     """
+
+    #: Element type of the grey frames given to :meth:`_start` and :meth:`_estimate`: float32, or uint8 for
+    #: trackers that convert only the regions they sample (less memory and time on large frames).
+    gray_dtype: ClassVar[type] = np.float32
 
     def __init__(self, *, lost_threshold: float):
         self.lost_threshold = float(lost_threshold)
@@ -92,13 +96,13 @@ class SimilarityTracker(Tracker):
     def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
         self.roi = roi
         self.last = Similarity(roi.cx, roi.cy, 1.0, 0.0, 1.0)
-        self._start(to_gray(frame), roi)
+        self._start(to_gray(frame, self.gray_dtype), roi)
         return self._state(self.last)
 
     def update(self, frame: np.ndarray) -> tuple[bool, TrackState]:
         if self.last is None:
             raise RuntimeError("update() called before init()")
-        estimate = self._estimate(to_gray(frame), self.last)
+        estimate = self._estimate(to_gray(frame, self.gray_dtype), self.last)
         ok = estimate is not None and estimate.score >= self.lost_threshold and _finite(estimate)
         if ok:
             self.last = estimate

@@ -94,6 +94,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
     summary = ("default: correlation filter for the centre in the object's frame + log-polar phase "
                "correlation for scale/rotation; motion prediction, confident-only learning, re-detection")
 
+    #: Grey frames stay uint8; only the regions sampled are converted (see :meth:`_float_region`).
+    gray_dtype = np.uint8
+
     def __init__(self, *, padding: float = 1.0, patch_samples: int = 64, learning_rate: float = 0.02,
                  lp_learning_rate: float = 0.02, n_rho: int = 32, n_theta: int = 64, lost_threshold: float = 0.2,
                  psr_learn: float = 7.0, lp_min_height: float = 0.1, max_scale_step: float = 0.1,
@@ -138,6 +141,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.label_conj = self.spectra.real_spectrum(label)
 
         self.grid = LogPolarGrid(roi.a, roi.b, n_rho=self.n_rho, n_theta=self.n_theta, inner_px=2.0)
+        self._lp_reach = float(np.hypot(*self.grid.offsets).max())  # pixels from the centre at scale 1
         self.correlator = PhaseCorrelator((self.n_rho, self.n_theta))
         # Packed spectra need even sizes; odd ones keep the plain NumPy correlator.
         self.packed_correlator = (_PackedPhaseCorrelator(self.correlator)
@@ -147,7 +151,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.lp_prior = np.exp(-0.5 * ((d_log_scale / self.scale_sigma) ** 2 + (d_angle / self.rotation_sigma) ** 2)
                                ).astype(np.float32)
 
-        self.fill = float(gray.mean())
+        self.fill = float(cv2.mean(gray)[0])
         self._blur_cache = None
         self.frame_size = gray.shape[1], gray.shape[0]
         first = Similarity(roi.cx, roi.cy, 1.0, 0.0, 1.0)
@@ -328,7 +332,12 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             if blurred is None:
                 return np.full((ny, nx), self.fill, np.float32)
             gray, x0, y0 = blurred
-            matrix[:, 2] -= (x0, y0)
+        else:  # bilinear sampling reads one pixel beyond the samples
+            reach_x = k * (px * abs(cos_t) + py * abs(sin_t)) + 2
+            reach_y = k * (px * abs(sin_t) + py * abs(cos_t)) + 2
+            gray, x0, y0 = self._float_region(gray, state.cx - reach_x, state.cy - reach_y,
+                                              state.cx + reach_x, state.cy + reach_y)
+        matrix[:, 2] -= (x0, y0)
         # Outside the frame is a constant, not replicated edges: streaks would look like structure to the filter.
         return cv2.warpAffine(gray, matrix, (nx, ny), flags=flags, borderMode=cv2.BORDER_CONSTANT,
                               borderValue=self.fill)
@@ -353,7 +362,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         # A little slack, so that a centre that moves by a few pixels stays covered.
         x0, y0 = max(x0 - _SLACK_PX, 0), max(y0 - _SLACK_PX, 0)
         x1, y1 = min(x1 + _SLACK_PX, width), min(y1 + _SLACK_PX, height)
-        blurred = cv2.GaussianBlur(gray[y0:y1, x0:x1], (0, 0), sigma)
+        blurred = cv2.GaussianBlur(gray[y0:y1, x0:x1].astype(np.float32), (0, 0), sigma)
         self._blur_cache = (gray, sigma, x0, y0, x1, y1, blurred)
         return blurred, x0, y0
 
@@ -368,7 +377,28 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         u, v = self.grid.offsets
         map_x = cv2.addWeighted(u, c, v, -s, state.cx, dtype=cv2.CV_32F)
         map_y = cv2.addWeighted(u, -s, v, -c, state.cy, dtype=cv2.CV_32F)
-        return cv2.remap(gray, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        reach = self._lp_reach * state.scale + 2
+        region, x0, y0 = self._float_region(gray, state.cx - reach, state.cy - reach, state.cx + reach,
+                                            state.cy + reach)
+        # Subtracting whole pixels is exact in float32 (the result needs no more bits than the map value).
+        map_x -= x0
+        map_y -= y0
+        return cv2.remap(region, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+    @staticmethod
+    def _float_region(gray, left: float, top: float, right: float, bottom: float):
+        """``gray[top:bottom, left:right]`` (pixels, inclusive, clamped into the frame) as float32, and its
+        top-left pixel ``(x0, y0)``.
+
+        Clamping, rather than clipping, keeps at least one row and column: points outside the frame then read
+        the crop's edge, which is the frame's edge on that side, so replicated or constant borders sample exactly
+        as on the whole frame."""
+        height, width = gray.shape
+        x0 = min(max(int(math.floor(left)), 0), width - 1)
+        y0 = min(max(int(math.floor(top)), 0), height - 1)
+        x1 = min(max(int(math.ceil(right)) + 1, x0 + 1), width)
+        y1 = min(max(int(math.ceil(bottom)) + 1, y0 + 1), height)
+        return gray[y0:y1, x0:x1].astype(np.float32), x0, y0
 
 
 class _PackedSpectra:

@@ -133,3 +133,13 @@ def test_to_gray_leaves_frame_alone():
     gray = to_gray(frame)
     assert gray.dtype == np.float32 and gray.shape == (10, 12)
     assert np.array_equal(frame, before)
+
+
+def test_to_gray_in_uint8_is_opencvs_conversion_and_never_the_input():
+    frame = random_texture(40, 60, np.random.default_rng(2))
+    gray = to_gray(frame, np.uint8)
+    assert gray.dtype == np.uint8 and np.array_equal(gray, cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY))
+    np.testing.assert_array_equal(to_gray(frame), gray.astype(np.float32))
+    single = gray.copy()
+    again = to_gray(single, np.uint8)
+    assert again is not single and np.array_equal(again, single)

@@ -95,7 +95,8 @@ class VideoOutcome:
     """What happened to one video of a batch.
 
     ``status`` is ``ok``, ``failed`` (``reason`` says why) or ``skipped`` (its outputs existed). ``frames``
-    counts tracked frames; ``expected_frames`` is what the container announced (``truncated`` when fewer came).
+    counts tracked frames; ``expected_frames`` is what the container announced, and ``truncated`` says that
+    fewer came (:attr:`RunSummary.truncated <logpolar_track.pipeline.RunSummary.truncated>`).
     """
 
     label: str
@@ -105,11 +106,8 @@ class VideoOutcome:
     lost: int = 0
     expected_frames: int = 0
     seconds: float = 0.0
+    truncated: bool = False
     rows: str | None = None
-
-    @property
-    def truncated(self) -> bool:
-        return self.status == "ok" and 0 < self.frames < self.expected_frames
 
 
 @dataclass
@@ -380,6 +378,7 @@ def run_job(job: VideoJob, report: Callable[[int], None] | None = None) -> Video
                         overwrite=job.overwrite, progress=progress, csv_options=csv_options)
     return VideoOutcome(job.label, "ok", frames=summary.frames, lost=summary.lost,
                         expected_frames=summary.expected_frames, seconds=summary.seconds,
+                        truncated=summary.truncated,
                         rows=None if buffer is None else buffer.getvalue())
 
 

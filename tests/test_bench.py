@@ -8,7 +8,6 @@ import pickle
 from pathlib import Path
 
 import cv2
-import numpy as np
 import pytest
 from click.testing import CliRunner
 

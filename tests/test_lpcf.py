@@ -11,7 +11,6 @@ import math
 
 import cv2
 import numpy as np
-import pytest
 
 from logpolar_track.geometry import Ellipse
 from logpolar_track.synthetic import Pose, random_texture, render_frame, similarity_path, synthetic_sequence

@@ -20,7 +20,6 @@ from ..batch import (BatchSummary, VideoOutcome, find_videos, outputs_complete, 
                      run_batch)
 from ..errors import UsageError
 from ..executor import default_jobs
-from ..geometry import ROI_SYNTAX
 from ..pipeline import CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, default_outputs, run_video
 from ..results import COLUMNS, FORMATS
 from ..trackers import tracker_class, tracker_names

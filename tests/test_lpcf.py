@@ -175,3 +175,34 @@ def test_accuracy_on_a_gentle_similarity_path():
     assert np.median(errors) <= 1.0
     assert np.median(scale_errors) <= 0.015
     assert np.median(rotation_errors) <= 0.5
+
+
+def test_learning_from_the_last_patch_matches_sampling_a_fresh_one(monkeypatch):
+    """The learning step reuses the last correlated patch (the object sits within a fraction of a sample of its
+    centre) instead of sampling a fourth one; on a generated zoom-and-turn path the track stays within 0.1 px,
+    0.3 % and 0.3 degrees of the straightforward tracker's (measured: 0.03 px, 0.1 %, 0.12 degrees)."""
+    import logpolar_track.trackers.lpcf as lpcf
+
+    roi = Ellipse.circle(320, 240, 50)
+    poses = similarity_path(120, (320, 240), scale_range=(0.8, 1.25), turns=0.5, radius_px=60)
+    frames = list(synthetic_sequence(poses, roi, seed=3))
+    _, reused = run(frames, roi)
+    monkeypatch.setattr(lpcf, "_REUSE_OFF_CENTRE", -1.0)  # always sample a fresh patch
+    _, fresh = run(frames, roi)
+    for (_, a), (_, b) in zip(reused, fresh):
+        assert math.hypot(a.centre[0] - b.centre[0], a.centre[1] - b.centre[1]) <= 0.1
+        assert abs(a.scale / b.scale - 1) <= 0.003
+        assert abs(a.rotation_deg - b.rotation_deg) <= 0.3
+
+
+def test_colour_frames_track_exactly_as_their_grey_conversion():
+    """Only the sampled regions of a colour frame are converted to grey; the track is the one of the frames
+    converted whole."""
+    roi = Ellipse(160, 120, 36, 24, 20)
+    poses = similarity_path(20, (160, 120), scale_range=(0.9, 1.1), turns=0.1, radius_px=20)
+    grey = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in synthetic_sequence(poses, roi, size=(320, 240), seed=11)]
+    rng = np.random.default_rng(2)
+    colour = [cv2.merge([g, cv2.add(g, 30), (rng.random(g.shape) * 255).astype(np.uint8)]) for g in grey]
+    _, from_colour = run(colour, roi)
+    _, from_grey = run([cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in colour], roi)
+    assert [s for _, s in from_colour] == [s for _, s in from_grey]

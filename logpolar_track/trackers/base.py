@@ -84,9 +84,10 @@ class SimilarityTracker(Tracker):
     lost, and keeps the last good state for them.
     """
 
-    #: Element type of the grey frames given to :meth:`_start` and :meth:`_estimate`: float32, or uint8 for
-    #: trackers that convert only the regions they sample (less memory and time on large frames).
-    gray_dtype: ClassVar[type] = np.float32
+    #: Element type of the grey frames given to :meth:`_start` and :meth:`_estimate`: float32, or None for
+    #: trackers that take frames as decoded and convert only the regions they sample (less memory and time on
+    #: large frames).
+    gray_dtype: ClassVar[type | None] = np.float32
 
     def __init__(self, *, lost_threshold: float):
         self.lost_threshold = float(lost_threshold)
@@ -96,13 +97,13 @@ class SimilarityTracker(Tracker):
     def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
         self.roi = roi
         self.last = Similarity(roi.cx, roi.cy, 1.0, 0.0, 1.0)
-        self._start(to_gray(frame, self.gray_dtype), roi)
+        self._start(self._prepared(frame), roi)
         return self._state(self.last)
 
     def update(self, frame: np.ndarray) -> tuple[bool, TrackState]:
         if self.last is None:
             raise RuntimeError("update() called before init()")
-        estimate = self._estimate(to_gray(frame, self.gray_dtype), self.last)
+        estimate = self._estimate(self._prepared(frame), self.last)
         ok = estimate is not None and estimate.score >= self.lost_threshold and _finite(estimate)
         if ok:
             self.last = estimate
@@ -110,6 +111,9 @@ class SimilarityTracker(Tracker):
             return True, self._state(estimate)
         score = 0.0 if estimate is None or not math.isfinite(estimate.score) else estimate.score
         return False, self._state(self.last, score=score)
+
+    def _prepared(self, frame: np.ndarray) -> np.ndarray:
+        return frame if self.gray_dtype is None else to_gray(frame, self.gray_dtype)
 
     def _state(self, sim: Similarity, score: float | None = None) -> TrackState:
         ellipse = self.roi.moved(sim.cx, sim.cy, sim.scale, sim.rotation_deg)

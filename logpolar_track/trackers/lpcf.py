@@ -23,12 +23,12 @@ This is the structure of LDES (Li, Zhu, Hoi, Hoi, Zhu, "Robust estimation of sim
 visual object tracking", AAAI 2019), with a simpler filter, and of the thesis' future work (decoupled
 translation, motion prediction, drift-free updates).
 
-Speed: a frame costs four feature patches (three correlations and the learning step, which reuses the third's
-blurred crop) and two log-polar matches. Where the time goes (one core, 640x480, radius 50, about 2 ms a
-frame): the anti-aliasing blur of the patch's crop (about a third), the seven feature channels (a fifth), their
-DFTs (a sixth, in OpenCV's packed real spectra, see ``_PackedSpectra``), and the caller's whole-frame grey
-conversion (under a tenth). Each shortcut here keeps the numbers of the straightforward implementation up to
-float32 rounding.
+Speed: a frame costs three feature patches (the correlations; the learning step reuses the last one, which is
+where the object was found to within a fraction of a sample) cut from one blurred crop, and two log-polar
+matches. Only that crop of the frame is converted to grey. Where the time goes (one core, 640x480, radius 50,
+about 1.4 ms a frame): the seven feature channels and their DFTs (in OpenCV's packed real spectra, see
+``_PackedSpectra``) about half, the crop's grey conversion and anti-aliasing blur about a seventh, the
+log-polar matches and the learning step the rest.
 
 References
 ----------
@@ -45,7 +45,7 @@ import numpy as np
 
 from ..features import patch_features
 from ..geometry import Ellipse
-from ..logpolar import LogPolarGrid, PhaseCorrelator
+from ..logpolar import LogPolarGrid, PhaseCorrelator, to_gray
 from .base import Similarity, SimilarityTracker, TrackState, register
 
 
@@ -94,8 +94,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
     summary = ("default: correlation filter for the centre in the object's frame + log-polar phase "
                "correlation for scale/rotation; motion prediction, confident-only learning, re-detection")
 
-    #: Grey frames stay uint8; only the regions sampled are converted (see :meth:`_float_region`).
-    gray_dtype = np.uint8
+    #: Frames come as decoded (BGR or grey uint8): only the regions sampled are converted to grey float32 (see
+    #: :func:`_grey_region`), which is a fraction of a whole-frame conversion's time and memory.
+    gray_dtype = None
 
     def __init__(self, *, padding: float = 1.0, patch_samples: int = 64, learning_rate: float = 0.02,
                  lp_learning_rate: float = 0.02, n_rho: int = 32, n_theta: int = 64, lost_threshold: float = 0.2,
@@ -125,7 +126,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.trust_low, self.trust_high = float(trust_low), float(trust_high)
 
     # -- set-up -----------------------------------------------------------------------------------------
-    def _start(self, gray: np.ndarray, roi: Ellipse) -> None:
+    def _start(self, frame: np.ndarray, roi: Ellipse) -> None:
         half_w, half_h = roi.half_extents()
         extent_w, extent_h = 2 * half_w * (1 + self.padding), 2 * half_h * (1 + self.padding)
         self.step = max(extent_w, extent_h) / self.patch_samples  # pixels per sample at scale 1
@@ -151,22 +152,23 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.lp_prior = np.exp(-0.5 * ((d_log_scale / self.scale_sigma) ** 2 + (d_angle / self.rotation_sigma) ** 2)
                                ).astype(np.float32)
 
-        self.fill = float(cv2.mean(gray)[0])
-        self._blur_cache = None
-        self.frame_size = gray.shape[1], gray.shape[0]
+        self.fill = float(cv2.mean(to_gray(frame, np.uint8))[0])
+        self._blur_cache = self._grey_cache = None
+        self._blur_scale = 1.0
+        self.frame_size = frame.shape[1], frame.shape[0]
         first = Similarity(roi.cx, roi.cy, 1.0, 0.0, 1.0)
-        spec = self._feature_spectrum(gray, first)
+        spec = self._feature_spectrum(frame, first)
         self.numerator = self.label_conj * spec
         self.denominator = self.spectra.power(spec)
         self._filter()
-        self.lp_model = self._log_polar(gray, first)
+        self.lp_model = self._log_polar(frame, first)
         self.lp_anchor = self.lp_model.copy()
         self._lp_references()
         self.velocity = np.zeros(2)  # pixels per frame
         self.match_level = 1.0  # the first frame matches itself perfectly
         self.cursor = first
         self.misses = 0
-        self._blur_cache = None  # the first frame is not needed any more
+        self._blur_cache = self._grey_cache = None  # the first frame is not needed any more
 
     # -- per frame ---------------------------------------------------------------------------------------
     def update(self, frame: np.ndarray) -> tuple[bool, TrackState]:
@@ -174,22 +176,23 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             return super().update(frame)
         finally:
             # A frame's blurred crop is reused within the frame, never after: let the frame go (33 MB at 4K).
-            self._blur_cache = None
+            self._blur_cache = self._grey_cache = None
 
-    def _estimate(self, gray: np.ndarray, last: Similarity) -> Similarity | None:
+    def _estimate(self, frame: np.ndarray, last: Similarity) -> Similarity | None:
         # Search from the tracker's own latest estimate, even when it was reported lost (the report keeps the
         # last good geometry): an object that only looked unlike itself for a few frames is followed on.
         last = self.cursor
+        self._blur_scale = last.scale
         predicted = Similarity(last.cx + self.velocity[0], last.cy + self.velocity[1], last.scale,
                                last.rotation_deg, last.score)
-        moved, psr, peak = self._translate(gray, predicted)
+        moved, psr, peak = self._translate(frame, predicted)
         if self.misses >= self.redetect_after:
-            moved, psr, peak = self._redetect(gray, predicted, moved, psr, peak)
+            moved, psr, peak = self._redetect(frame, predicted, moved, psr, peak)
         # Iterate to agreement: each scale/rotation estimate is made at a better centre, and the residual
         # change shrinks, which matters because windowed phase correlation under-reads large shifts.
         for _ in range(self.iterations):
-            turned, lp_height = self._scale_rotate(gray, moved)
-            moved, psr, peak = self._translate(gray, turned)
+            turned, lp_height = self._scale_rotate(frame, moved)
+            moved, psr, peak = self._translate(frame, turned)
         width, height = self.frame_size
         # Confidence: the filter's response (is the pattern here?) and the log-polar match of the region with
         # the appearance model (is it the same object, at this scale and angle?) must both be high.
@@ -216,18 +219,20 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self.velocity *= reach / speed
         self.match_level += self.level_rate * (match - self.match_level)
         if psr >= self.psr_learn:
-            self._learn(gray, refined, lp_height)
+            self._learn(frame, refined, lp_height)
         return refined
 
-    def _translate(self, gray, state: Similarity) -> tuple[Similarity, float, float]:
+    def _translate(self, frame, state: Similarity) -> tuple[Similarity, float, float]:
         """Correlate the filter with a patch around ``state``; returns the moved state, PSR and peak value."""
-        response = self.spectra.correlate(self._filter_parts, self._feature_spectrum(gray, state))
+        spectrum = self._feature_spectrum(frame, state)
+        self._last_sample = state, spectrum
+        response = self.spectra.correlate(self._filter_parts, spectrum)
         dy, dx, peak, psr = _peak_and_psr(response)
         motion = _rotate_screen(np.array([dx, dy]) * self.step * state.scale, state.rotation_deg)
         moved = Similarity(state.cx + motion[0], state.cy + motion[1], state.scale, state.rotation_deg, peak)
         return moved, psr, peak
 
-    def _redetect(self, gray, state: Similarity, best: Similarity, psr: float, peak: float):
+    def _redetect(self, frame, state: Similarity, best: Similarity, psr: float, peak: float):
         """While lost, also search patches tiled around the last position (a ring that widens each frame)."""
         reach = min(self.misses - self.redetect_after + 1, 4)
         nx, ny = self.size
@@ -239,12 +244,12 @@ class LogPolarCorrelationTracker(SimilarityTracker):
                                         state.rotation_deg)
                 candidate = Similarity(state.cx + offset[0], state.cy + offset[1], state.scale,
                                        state.rotation_deg, state.score)
-                moved, cand_psr, cand_peak = self._translate(gray, candidate)
+                moved, cand_psr, cand_peak = self._translate(frame, candidate)
                 if cand_psr > psr:
                     best, psr, peak = moved, cand_psr, cand_peak
         return best, psr, peak
 
-    def _scale_rotate(self, gray, state: Similarity) -> tuple[Similarity, float]:
+    def _scale_rotate(self, frame, state: Similarity) -> tuple[Similarity, float]:
         """Change of scale and angle from the log-polar match at ``state``'s centre, and the match height.
 
         The match surface is weighted by the motion prior before its peak is read (a MAP estimate): a weak,
@@ -253,7 +258,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         shrinks even a clean measurement to a fraction of its size; a high peak (``trust_low`` to
         ``trust_high``) therefore has its sub-bin offset read on the raw surface.
         """
-        image = self._log_polar(gray, state)
+        image = self._log_polar(frame, state)
         # Against the learnt model (follows appearance) and the first frame's image (cannot drift): a model
         # learnt at slightly wrong scales would otherwise make the error self-consistent.
         if self.packed_correlator is not None:
@@ -284,15 +289,22 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         return Similarity(state.cx, state.cy, state.scale * math.exp(log_scale), state.rotation_deg + rotation,
                           state.score), height
 
-    def _learn(self, gray, state: Similarity, lp_height: float) -> None:
-        spec = self._feature_spectrum(gray, state)
+    def _learn(self, frame, state: Similarity, lp_height: float) -> None:
+        # The last correlation's patch is where the object was found to within a fraction of a sample (on the
+        # real sequences the median is 0.02 samples, the 95th percentile 0.25): learn from it rather than
+        # sample a fourth patch, unless the object is further off its centre than that.
+        sampled_at, spec = self._last_sample
+        off_centre = math.hypot(state.cx - sampled_at.cx, state.cy - sampled_at.cy) / (self.step * state.scale)
+        if (off_centre > _REUSE_OFF_CENTRE or state.scale != sampled_at.scale
+                or state.rotation_deg != sampled_at.rotation_deg):
+            spec = self._feature_spectrum(frame, state)
         rate = self.learning_rate
         self.numerator = (1 - rate) * self.numerator + rate * self.label_conj * spec
         self.denominator = (1 - rate) * self.denominator + rate * self.spectra.power(spec)
         self._filter()
         if lp_height >= self.lp_min_height:
             self.lp_model = (1 - self.lp_learning_rate) * self.lp_model + self.lp_learning_rate * self._log_polar(
-                gray, state)
+                frame, state)
             self._lp_references()
 
     def _filter(self) -> None:
@@ -309,7 +321,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self._references = self.correlator.spectrum(np.stack(images))
 
     # -- sampling ------------------------------------------------------------------------------------------
-    def _patch(self, gray, state: Similarity) -> np.ndarray:
+    def _patch(self, frame, state: Similarity) -> np.ndarray:
         """The search patch in the object's frame: ``size`` samples, ``step * scale`` pixels apart."""
         nx, ny = self.size
         k = self.step * state.scale
@@ -321,55 +333,63 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         matrix = np.array([[c, s, state.cx - c * px - s * py],
                            [-s, c, state.cy + s * px - c * py]], dtype=np.float64)
         flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
-        if k > 1.5:  # shrinking: average first so the patch does not alias -- only the part the patch covers
+        # The anti-aliasing blur follows the scale the frame started at, not each iteration's: the scale moves
+        # by a few per cent within a frame, and one blurred crop then serves all of the frame's patches.
+        blur_k = self.step * self._blur_scale
+        if blur_k > 1.5:  # shrinking: average first so the patch does not alias -- only the part the patch covers
             # The samples lie within (reach_x, reach_y) of the centre; bilinear sampling reads one pixel further
-            # and the blur's kernel (4 sigma = 2k) two k further, so the crop's own edges never show.
-            margin = 2 * k + 3
+            # and the blur's kernel (4 sigma = 2 blur_k) two blur_k further, so the crop's own edges never show.
+            margin = 2 * blur_k + 3
             reach_x = k * (px * abs(cos_t) + py * abs(sin_t)) + margin
             reach_y = k * (px * abs(sin_t) + py * abs(cos_t)) + margin
-            blurred = self._blurred(gray, 0.5 * k, state.cx - reach_x, state.cy - reach_y,
+            blurred = self._blurred(frame, 0.5 * blur_k, state.cx - reach_x, state.cy - reach_y,
                                     state.cx + reach_x, state.cy + reach_y)
             if blurred is None:
                 return np.full((ny, nx), self.fill, np.float32)
-            gray, x0, y0 = blurred
+            frame, x0, y0 = blurred
         else:  # bilinear sampling reads one pixel beyond the samples
             reach_x = k * (px * abs(cos_t) + py * abs(sin_t)) + 2
             reach_y = k * (px * abs(sin_t) + py * abs(cos_t)) + 2
-            gray, x0, y0 = self._float_region(gray, state.cx - reach_x, state.cy - reach_y,
+            frame, x0, y0 = self._float_region(frame, state.cx - reach_x, state.cy - reach_y,
                                               state.cx + reach_x, state.cy + reach_y)
         matrix[:, 2] -= (x0, y0)
         # Outside the frame is a constant, not replicated edges: streaks would look like structure to the filter.
-        return cv2.warpAffine(gray, matrix, (nx, ny), flags=flags, borderMode=cv2.BORDER_CONSTANT,
+        return cv2.warpAffine(frame, matrix, (nx, ny), flags=flags, borderMode=cv2.BORDER_CONSTANT,
                               borderValue=self.fill)
 
-    def _blurred(self, gray, sigma: float, left: float, top: float, right: float, bottom: float):
-        """``gray`` blurred by ``sigma`` px over at least ``[left, right] x [top, bottom]`` (clipped to the
+    def _blurred(self, frame, sigma: float, left: float, top: float, right: float, bottom: float):
+        """``frame`` blurred by ``sigma`` px over at least ``[left, right] x [top, bottom]`` (clipped to the
         frame), with the crop's top-left pixel ``(x0, y0)``; None when the region misses the frame.
 
         One frame is sampled several times at the same scale (the learning step samples where the last
         correlation left the object), so the last blurred crop is kept and reused when it covers the region:
         away from its edges a crop's blur equals the whole frame's, so reuse does not change the samples.
         """
-        height, width = gray.shape
+        height, width = frame.shape[:2]
         x0, y0 = max(int(math.floor(left)), 0), max(int(math.floor(top)), 0)
         x1, y1 = min(int(math.ceil(right)) + 1, width), min(int(math.ceil(bottom)) + 1, height)
         if x1 - x0 < 2 or y1 - y0 < 2:
             return None
         cache = self._blur_cache
-        if (cache is not None and cache[0] is gray and cache[1] == sigma and cache[2] <= x0 and cache[3] <= y0
+        if (cache is not None and cache[0] is frame and cache[1] == sigma and cache[2] <= x0 and cache[3] <= y0
                 and x1 <= cache[4] and y1 <= cache[5]):
             return cache[6], cache[2], cache[3]
-        # A little slack, so that a centre that moves by a few pixels stays covered.
-        x0, y0 = max(x0 - _SLACK_PX, 0), max(y0 - _SLACK_PX, 0)
-        x1, y1 = min(x1 + _SLACK_PX, width), min(y1 + _SLACK_PX, height)
-        blurred = cv2.GaussianBlur(gray[y0:y1, x0:x1].astype(np.float32), (0, 0), sigma)
-        self._blur_cache = (gray, sigma, x0, y0, x1, y1, blurred)
+        # Slack, so that the frame's later patches -- moved by a few pixels, scaled by a few per cent -- stay
+        # covered.
+        slack = _SLACK_PX + int(_SLACK_FRACTION * max(x1 - x0, y1 - y0))
+        x0, y0 = max(x0 - slack, 0), max(y0 - slack, 0)
+        x1, y1 = min(x1 + slack, width), min(y1 + slack, height)
+        # The kernel is cut at 2.5 sigma (OpenCV's default for float images is 4): enough against aliasing, at
+        # half the cost.
+        size = 2 * math.ceil(2.5 * sigma) + 1
+        blurred = cv2.GaussianBlur(self._grey(frame, x0, y0, x1, y1), (size, size), sigma)
+        self._blur_cache = (frame, sigma, x0, y0, x1, y1, blurred)
         return blurred, x0, y0
 
-    def _feature_spectrum(self, gray, state: Similarity) -> np.ndarray:
-        return self.spectra.forward(patch_features(self._patch(gray, state), window=self.window))
+    def _feature_spectrum(self, frame, state: Similarity) -> np.ndarray:
+        return self.spectra.forward(patch_features(self._patch(frame, state), window=self.window))
 
-    def _log_polar(self, gray, state: Similarity) -> np.ndarray:
+    def _log_polar(self, frame, state: Similarity) -> np.ndarray:
         """Log-polar image at ``state`` (``LogPolarGrid.sample`` for one centre, with the maps made by
         ``cv2.addWeighted`` from the grid's offsets: equal up to float rounding, a third of the cost)."""
         psi = math.radians(self.roi.angle_deg + state.rotation_deg)
@@ -378,27 +398,37 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         map_x = cv2.addWeighted(u, c, v, -s, state.cx, dtype=cv2.CV_32F)
         map_y = cv2.addWeighted(u, -s, v, -c, state.cy, dtype=cv2.CV_32F)
         reach = self._lp_reach * state.scale + 2
-        region, x0, y0 = self._float_region(gray, state.cx - reach, state.cy - reach, state.cx + reach,
+        region, x0, y0 = self._float_region(frame, state.cx - reach, state.cy - reach, state.cx + reach,
                                             state.cy + reach)
         # Subtracting whole pixels is exact in float32 (the result needs no more bits than the map value).
         map_x -= x0
         map_y -= y0
         return cv2.remap(region, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
 
-    @staticmethod
-    def _float_region(gray, left: float, top: float, right: float, bottom: float):
-        """``gray[top:bottom, left:right]`` (pixels, inclusive, clamped into the frame) as float32, and its
+    def _float_region(self, frame, left: float, top: float, right: float, bottom: float):
+        """``frame[top:bottom, left:right]`` (pixels, inclusive, clamped into the frame) as float32, and its
         top-left pixel ``(x0, y0)``.
 
         Clamping, rather than clipping, keeps at least one row and column: points outside the frame then read
         the crop's edge, which is the frame's edge on that side, so replicated or constant borders sample exactly
         as on the whole frame."""
-        height, width = gray.shape
+        height, width = frame.shape[:2]
         x0 = min(max(int(math.floor(left)), 0), width - 1)
         y0 = min(max(int(math.floor(top)), 0), height - 1)
         x1 = min(max(int(math.ceil(right)) + 1, x0 + 1), width)
         y1 = min(max(int(math.ceil(bottom)) + 1, y0 + 1), height)
-        return gray[y0:y1, x0:x1].astype(np.float32), x0, y0
+        return self._grey(frame, x0, y0, x1, y1), x0, y0
+
+    def _grey(self, frame, x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
+        """``frame[y0:y1, x0:x1]`` as grey float32 (:func:`_grey_region`), not to be modified. The frame's
+        first region (the blurred crop, the largest) usually covers the later ones, so it is kept and sliced."""
+        cache = self._grey_cache
+        if (cache is not None and cache[0] is frame and cache[1] <= x0 and cache[2] <= y0 and x1 <= cache[3]
+                and y1 <= cache[4]):
+            return cache[5][y0 - cache[2]:y1 - cache[2], x0 - cache[1]:x1 - cache[1]]
+        grey = _grey_region(frame, x0, y0, x1, y1)
+        self._grey_cache = frame, x0, y0, x1, y1, grey
+        return grey
 
 
 class _PackedSpectra:
@@ -526,6 +556,18 @@ class _PackedPhaseCorrelator:
 
 #: Extra pixels around a blurred crop, so that the learning step's patch can reuse it (see ``_blurred``).
 _SLACK_PX = 4
+_SLACK_FRACTION = 0.05
+#: Samples the object may sit off the last correlated patch's centre for that patch to be learnt from.
+_REUSE_OFF_CENTRE = 0.25
+
+
+def _grey_region(frame: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
+    """``frame[y0:y1, x0:x1]`` as grey float32 (0 to 255): OpenCV's BGR-to-grey conversion, pixel by pixel
+    the same as converting the whole frame."""
+    region = frame[y0:y1, x0:x1]
+    if region.ndim == 3:
+        region = cv2.cvtColor(region, cv2.COLOR_BGR2GRAY)
+    return region.astype(np.float32)
 
 
 def _signed_bins(n: int) -> np.ndarray:

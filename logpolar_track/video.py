@@ -1,9 +1,10 @@
 """Reading and writing videos with OpenCV, without surprises.
 
-:class:`VideoReader` iterates ``(index, time_s, frame)`` over a video file, decoding a few frames ahead in a
+:class:`VideoReader` iterates ``(index, time_s, frame)`` over a video file, decoding a frame ahead in a
 background thread so that decoding overlaps tracking. :class:`VideoWriter` opens on the first frame, tries
-codecs in order and says which one it used, and writes to a temporary name that is renamed only when the
-video is complete -- a killed run never leaves a file that looks finished.
+codecs in order and says which one it used, encodes in a background thread so that encoding overlaps tracking
+too, and writes to a temporary name that is renamed only when the video is complete -- a killed run never
+leaves a file that looks finished.
 
 Frames are BGR ``uint8`` arrays of shape ``(height, width, 3)`` as OpenCV decodes them. Frame indexes count
 from 0 at the first frame of the file; ``time_s = index / fps`` (the nominal time of a constant-rate video).
@@ -313,6 +314,10 @@ class VideoWriter:
     -----
     Frames go to a hidden temporary file in the same folder (:func:`temporary_path`), renamed to
     :attr:`path` by :meth:`close`. :meth:`abort` (and leaving a ``with`` block by an exception) deletes it.
+
+    Frames are encoded in a background thread (OpenCV releases the GIL while it encodes), one frame behind the
+    caller: :meth:`write` waits for the previous frame to be encoded, hands the new one over and returns. A frame
+    passed to :meth:`write` must therefore not be modified afterwards; pass a copy if you will reuse its buffer.
     """
 
     def __init__(self, path, fps: float, *, overwrite: bool = False):
@@ -333,6 +338,10 @@ class VideoWriter:
         self._writer = None
         self._temp: Path | None = None
         self._closed = False
+        # Hand-over to the encoding thread, which holds one frame at a time (see write()).
+        self._queue: queue.Queue = queue.Queue(maxsize=1)
+        self._thread: threading.Thread | None = None
+        self._failure: BaseException | None = None
 
     def __enter__(self) -> "VideoWriter":
         return self
@@ -356,6 +365,9 @@ class VideoWriter:
             if writer.isOpened():
                 self._writer, self._temp, self.path, self.fourcc = writer, temp, target, code
                 self.size = (width, height)
+                self._thread = threading.Thread(target=self._encode, name=f"lptrack-write-{target.name}",
+                                                daemon=True)
+                self._thread.start()
                 return
             writer.release()
             temp.unlink(missing_ok=True)
@@ -375,8 +387,37 @@ class VideoWriter:
         elif (width, height) != self.size:
             raise OutputError(f"cannot write video '{self.path}': frame {self.frames_written} is "
                               f"{width}x{height}, the video is {self.size[0]}x{self.size[1]}")
-        self._writer.write(np.ascontiguousarray(frame, dtype=np.uint8))
+        # One frame at a time in the encoder: wait for the previous one to be done (a frame waiting besides it
+        # would cost another frame of memory, 25 MB at 4K, and buy nothing while encoding is the faster side).
+        self._queue.join()
+        self._raise_failure()
+        self._queue.put(np.ascontiguousarray(frame, dtype=np.uint8))
         self.frames_written += 1
+
+    def _encode(self) -> None:
+        """Background thread: encode queued frames until the end marker; a failure is kept for the caller."""
+        while True:
+            frame = self._queue.get()
+            if frame is _END:
+                return
+            if self._failure is None:
+                try:
+                    self._writer.write(frame)
+                except Exception as exc:  # noqa: BLE001 - raised in the caller's thread by _raise_failure
+                    self._failure = exc
+            del frame  # before task_done, so that a waiting caller finds its memory freed
+            self._queue.task_done()
+
+    def _raise_failure(self) -> None:
+        if self._failure is not None:
+            raise OutputError(f"cannot write video '{self.path}': {self._failure}") from self._failure
+
+    def _finish_encoding(self) -> None:
+        """Let the encoding thread finish the frames it was given, and stop it."""
+        if self._thread is not None:
+            self._queue.put(_END)
+            self._thread.join()
+            self._thread = None
 
     def close(self) -> Path | None:
         """Finish the video and move it to :attr:`path`; returns that path (None if no frame was written).
@@ -391,8 +432,10 @@ class VideoWriter:
         self._closed = True
         if self._writer is None:
             return None
+        self._finish_encoding()
         self._writer.release()
         try:
+            self._raise_failure()
             if not self._temp.exists() or self._temp.stat().st_size == 0:
                 raise OutputError(f"cannot write video '{self.path}': the {self.fourcc} encoder produced "
                                   f"no data")
@@ -409,6 +452,12 @@ class VideoWriter:
         """Stop writing and delete the temporary file; nothing is left behind. Safe to call more than once."""
         self._closed = True
         if self._writer is not None:
+            while True:  # frames waiting are not wanted any more
+                try:
+                    self._queue.get_nowait()
+                except queue.Empty:
+                    break
+            self._finish_encoding()
             self._writer.release()
             self._writer = None
         if self._temp is not None:

@@ -152,6 +152,44 @@ def test_writer_abort_on_exception_leaves_nothing(tiny_video, tmp_path):
     assert list(tmp_path.glob("out*")) == [] and list(tmp_path.glob(".out*")) == []
 
 
+def test_writer_encodes_frames_in_order_in_the_background(tmp_path):
+    """Frames are encoded by a background thread, in the order given (MJPG reads back within 2 levels)."""
+    frames = [np.full((48, 64, 3), 8 * i, np.uint8) for i in range(25)]
+    with VideoWriter(tmp_path / "out.avi", 25.0) as writer:
+        for frame in frames:
+            writer.write(frame)
+        assert writer._thread is not None and writer._thread.is_alive()
+    assert writer._thread is None
+    with VideoReader(tmp_path / "out.avi") as reader:
+        levels = [float(f.mean()) for _, _, f in reader]
+    assert len(levels) == 25
+    assert all(abs(level - 8 * i) <= 2 for i, level in enumerate(levels))  # JPEG rounding: 8 reads as 7
+
+
+def test_writer_encoder_failure_is_reported_and_leaves_nothing(tiny_video, tmp_path):
+    """An error inside the encoding thread surfaces in the caller as an OutputError; no file is left."""
+
+    class Broken:
+        def __init__(self, real):
+            self.real = real
+
+        def write(self, frame):
+            raise cv2.error("encoder exploded")
+
+        def release(self):
+            self.real.release()
+
+    writer = VideoWriter(tmp_path / "out.mp4", 30.0)
+    writer.write(tiny_video.frames[0])
+    writer._writer = Broken(writer._writer)
+    with pytest.raises(OutputError, match="encoder exploded"):
+        for frame in tiny_video.frames[1:]:
+            writer.write(frame)
+        writer.close()
+    writer.abort()
+    assert list(tmp_path.glob("out*")) == [] and list(tmp_path.glob(".out*")) == []
+
+
 def test_writer_falls_back_to_next_codec_and_says_so(tiny_video, tmp_path, monkeypatch):
     monkeypatch.setitem(video_module.CODECS_BY_EXTENSION, ".mp4", (("ZZZZ", ".mp4"), ("MJPG", ".avi")))
     with VideoWriter(tmp_path / "out.mp4", 30.0) as writer:

@@ -14,10 +14,12 @@ Per frame:
    object's frame, translation no longer corrupts this step, and because this step keeps the frame aligned,
    the filter in step 2 sees an upright, constant-size object.
 4. **Refine**: repeat step 2 once in the corrected frame.
-5. **Judge and learn**: the filter's peak-to-sidelobe ratio (PSR) decides whether the object was found.
-   Only confident frames update the filter and the log-polar model (running averages), so occluders and
-   distractors are not learnt. A lost object is searched for in a patch that grows each frame (re-detection)
-   while the last good geometry is reported.
+5. **Judge and learn**: the score is the match (geometric mean of the filter's response peak and the
+   log-polar match height); below ``lost_threshold`` the frame is reported lost with the last good geometry.
+   Only frames with a sharp filter response (peak-to-sidelobe ratio) and no sudden drop of the match update
+   the filter and the log-polar model (running averages), so occluders and distractors are not learnt. After
+   a few frames of such a drop the object is searched for in patches around the last position, a ring that
+   widens each frame (re-detection).
 
 This is the structure of LDES (Li, Zhu, Hoi, Hoi, Zhu, "Robust estimation of similarity transformation for
 visual object tracking", AAAI 2019), with a simpler filter, and of the thesis' future work (decoupled

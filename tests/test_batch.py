@@ -296,8 +296,11 @@ def long_footage(tmp_path_factory) -> Path:
 
 def _start_and_wait_for_a_temporary_file(long_footage, out: Path, *extra: str):
     """Start a 2-job batch with video output; return (process, pid of the worker writing the first temp file)."""
+    # A shell's background job inherits SIGINT ignored, and Python keeps it so: restore the default, or Ctrl-C
+    # would not reach the batch when the tests themselves run in the background.
     process = subprocess.Popen([*LPTRACK, "run", str(long_footage), "--out-dir", str(out), "--jobs", "2",
-                                "--tracker", "spatial", *extra], stderr=subprocess.PIPE, text=True)
+                                "--tracker", "spatial", *extra], stderr=subprocess.PIPE, text=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:
         temporary = list(out.glob(".*.part.*")) if out.exists() else []

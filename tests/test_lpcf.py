@@ -177,22 +177,29 @@ def test_accuracy_on_a_gentle_similarity_path():
     assert np.median(rotation_errors) <= 0.5
 
 
-def test_learning_from_the_last_patch_matches_sampling_a_fresh_one(monkeypatch):
-    """The learning step reuses the last correlated patch (the object sits within a fraction of a sample of its
-    centre) instead of sampling a fourth one; on a generated zoom-and-turn path the track stays within 0.1 px,
-    0.3 % and 0.3 degrees of the straightforward tracker's (measured: 0.03 px, 0.1 %, 0.12 degrees)."""
+def test_shortcuts_stay_close_to_the_straightforward_tracker(monkeypatch):
+    """Two shortcuts save a third of a frame's time: the iterations stop once the estimates agree (no further
+    correlation), and the learning step reuses the last correlated patch instead of sampling a fresh one. On a
+    generated zoom-and-turn path the track stays within 0.5 px, 1 % and 0.5 degrees of the tracker without them
+    (measured: 0.34 px, 0.73 %, 0.37 degrees at most; medians 0.14 px, 0.18 %, 0.06 degrees), and no further
+    from the truth."""
     import logpolar_track.trackers.lpcf as lpcf
 
     roi = Ellipse.circle(320, 240, 50)
     poses = similarity_path(120, (320, 240), scale_range=(0.8, 1.25), turns=0.5, radius_px=60)
     frames = list(synthetic_sequence(poses, roi, seed=3))
-    _, reused = run(frames, roi)
-    monkeypatch.setattr(lpcf, "_REUSE_OFF_CENTRE", -1.0)  # always sample a fresh patch
-    _, fresh = run(frames, roi)
-    for (_, a), (_, b) in zip(reused, fresh):
-        assert math.hypot(a.centre[0] - b.centre[0], a.centre[1] - b.centre[1]) <= 0.1
-        assert abs(a.scale / b.scale - 1) <= 0.003
-        assert abs(a.rotation_deg - b.rotation_deg) <= 0.3
+    _, shortcut = run(frames, roi)
+    # Without them: every iteration runs, and every learning step samples its own patch.
+    monkeypatch.setattr(lpcf, "_REUSE_OFF_CENTRE", -1.0)
+    for name in ("_AGREED_LOG_SCALE", "_AGREED_DEGREES", "_AGREED_SAMPLES"):
+        monkeypatch.setattr(lpcf, name, -1.0)
+    _, straight = run(frames, roi)
+    for (_, a), (_, b) in zip(shortcut, straight):
+        assert math.hypot(a.centre[0] - b.centre[0], a.centre[1] - b.centre[1]) <= 0.5
+        assert abs(a.scale / b.scale - 1) <= 0.01
+        assert abs(a.rotation_deg - b.rotation_deg) <= 0.5
+    truth = poses[1:]
+    assert np.median(centre_errors(shortcut, truth)) <= 1.05 * np.median(centre_errors(straight, truth))
 
 
 def test_colour_frames_track_exactly_as_their_grey_conversion():

@@ -311,7 +311,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
     def _learn(self, frame, state: Similarity, lp_height: float) -> None:
         # The last correlation's patch is where the object was found to within a fraction of a sample (on the
         # real sequences the median is 0.02 samples, the 95th percentile 0.25): learn from it rather than
-        # sample a fourth patch, unless the object is further off its centre than that.
+        # sample another patch, unless the object is further off its centre than that or the patch's scale and
+        # angle do not agree with the final ones (the last correlation was skipped, see _estimate).
         sampled_at, spec = self._last_sample
         off_centre = math.hypot(state.cx - sampled_at.cx, state.cy - sampled_at.cy) / (self.step * state.scale)
         if off_centre > _REUSE_OFF_CENTRE or not _agree(state, sampled_at):
@@ -369,7 +370,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             reach_x = k * (px * abs(cos_t) + py * abs(sin_t)) + 2
             reach_y = k * (px * abs(sin_t) + py * abs(cos_t)) + 2
             frame, x0, y0 = self._float_region(frame, state.cx - reach_x, state.cy - reach_y,
-                                              state.cx + reach_x, state.cy + reach_y)
+                                               state.cx + reach_x, state.cy + reach_y)
         matrix[:, 2] -= (x0, y0)
         # Outside the frame is a constant, not replicated edges: streaks would look like structure to the filter.
         return cv2.warpAffine(frame, matrix, (nx, ny), flags=flags, borderMode=cv2.BORDER_CONSTANT,

@@ -380,9 +380,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         """``frame`` blurred by ``sigma`` px over at least ``[left, right] x [top, bottom]`` (clipped to the
         frame), with the crop's top-left pixel ``(x0, y0)``; None when the region misses the frame.
 
-        One frame is sampled several times at the same scale (the learning step samples where the last
-        correlation left the object), so the last blurred crop is kept and reused when it covers the region:
-        away from its edges a crop's blur equals the whole frame's, so reuse does not change the samples.
+        A frame's patches are all blurred by the same ``sigma`` (see :meth:`_patch`), so the last blurred crop is
+        kept and reused when it covers the region: away from its edges a crop's blur equals the whole frame's,
+        so reuse does not change the samples.
         """
         height, width = frame.shape[:2]
         x0, y0 = max(int(math.floor(left)), 0), max(int(math.floor(top)), 0)

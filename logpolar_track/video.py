@@ -302,6 +302,8 @@ class VideoWriter:
     fourcc : str or None
         Codec used, e.g. ``"mp4v"``; None until the first frame is written.
     frames_written : int
+        Frames accepted by :meth:`write` (handed to the encoding thread; an encoding error is raised by the
+        next :meth:`write` or by :meth:`close`).
 
     Raises
     ------
@@ -338,10 +340,7 @@ class VideoWriter:
         self._writer = None
         self._temp: Path | None = None
         self._closed = False
-        # Hand-over to the encoding thread, which holds one frame at a time (see write()).
-        self._queue: queue.Queue = queue.Queue(maxsize=1)
-        self._thread: threading.Thread | None = None
-        self._failure: BaseException | None = None
+        self._encoder: _Encoder | None = None
 
     def __enter__(self) -> "VideoWriter":
         return self
@@ -365,9 +364,7 @@ class VideoWriter:
             if writer.isOpened():
                 self._writer, self._temp, self.path, self.fourcc = writer, temp, target, code
                 self.size = (width, height)
-                self._thread = threading.Thread(target=self._encode, name=f"lptrack-write-{target.name}",
-                                                daemon=True)
-                self._thread.start()
+                self._encoder = _Encoder(writer, f"lptrack-write-{target.name}")
                 return
             writer.release()
             temp.unlink(missing_ok=True)
@@ -387,37 +384,14 @@ class VideoWriter:
         elif (width, height) != self.size:
             raise OutputError(f"cannot write video '{self.path}': frame {self.frames_written} is "
                               f"{width}x{height}, the video is {self.size[0]}x{self.size[1]}")
-        # One frame at a time in the encoder: wait for the previous one to be done (a frame waiting besides it
-        # would cost another frame of memory, 25 MB at 4K, and buy nothing while encoding is the faster side).
-        self._queue.join()
+        self._encoder.put(np.ascontiguousarray(frame, dtype=np.uint8))
         self._raise_failure()
-        self._queue.put(np.ascontiguousarray(frame, dtype=np.uint8))
         self.frames_written += 1
 
-    def _encode(self) -> None:
-        """Background thread: encode queued frames until the end marker; a failure is kept for the caller."""
-        while True:
-            frame = self._queue.get()
-            if frame is _END:
-                return
-            if self._failure is None:
-                try:
-                    self._writer.write(frame)
-                except Exception as exc:  # noqa: BLE001 - raised in the caller's thread by _raise_failure
-                    self._failure = exc
-            del frame  # before task_done, so that a waiting caller finds its memory freed
-            self._queue.task_done()
-
     def _raise_failure(self) -> None:
-        if self._failure is not None:
-            raise OutputError(f"cannot write video '{self.path}': {self._failure}") from self._failure
-
-    def _finish_encoding(self) -> None:
-        """Let the encoding thread finish the frames it was given, and stop it."""
-        if self._thread is not None:
-            self._queue.put(_END)
-            self._thread.join()
-            self._thread = None
+        failure = self._encoder.failure if self._encoder is not None else None
+        if failure is not None:
+            raise OutputError(f"cannot write video '{self.path}': {failure}") from failure
 
     def close(self) -> Path | None:
         """Finish the video and move it to :attr:`path`; returns that path (None if no frame was written).
@@ -432,7 +406,7 @@ class VideoWriter:
         self._closed = True
         if self._writer is None:
             return None
-        self._finish_encoding()
+        self._encoder.finish()
         self._writer.release()
         try:
             self._raise_failure()
@@ -451,14 +425,71 @@ class VideoWriter:
     def abort(self) -> None:
         """Stop writing and delete the temporary file; nothing is left behind. Safe to call more than once."""
         self._closed = True
-        if self._writer is not None:
-            while True:  # frames waiting are not wanted any more
-                try:
-                    self._queue.get_nowait()
-                except queue.Empty:
-                    break
-            self._finish_encoding()
-            self._writer.release()
-            self._writer = None
-        if self._temp is not None:
-            self._temp.unlink(missing_ok=True)
+        try:
+            if self._writer is not None:
+                self._encoder.finish(discard=True)
+                self._writer.release()
+                self._writer = None
+        finally:  # even if a second Ctrl-C interrupts the wait for the encoder
+            if self._temp is not None:
+                self._temp.unlink(missing_ok=True)
+
+    def __del__(self) -> None:
+        # A writer dropped without close() or abort() (Python API use) must not keep its thread, encoder and
+        # temporary file for the life of the process.
+        if not getattr(self, "_closed", True):  # False only once __init__ has run
+            try:
+                self.abort()
+            except Exception:  # noqa: BLE001 - nothing can be reported from a finaliser
+                pass
+
+
+class _Encoder:
+    """A ``cv2.VideoWriter`` fed from a daemon thread, one frame at a time.
+
+    The thread holds only the queue, the OpenCV writer and this object, never the :class:`VideoWriter`, so a
+    dropped VideoWriter can still be finalised. Completion is signalled with an Event rather than learnt by
+    ``Thread.join``: a join interrupted by Ctrl-C reports the thread as finished while it may still be
+    encoding, and releasing the OpenCV writer under it crashes the process.
+    """
+
+    def __init__(self, writer: cv2.VideoWriter, name: str):
+        self.failure: BaseException | None = None
+        self.done = threading.Event()
+        # The caller waits for the previous frame before handing over the next (see put): a frame waiting
+        # besides the one being encoded would cost another frame of memory (25 MB at 4K) and buy nothing while
+        # encoding is the faster side.
+        self._frames: queue.Queue = queue.Queue(maxsize=1)
+        threading.Thread(target=self._run, args=(self._frames, writer), name=name, daemon=True).start()
+
+    def _run(self, frames: queue.Queue, writer: cv2.VideoWriter) -> None:
+        try:
+            while True:
+                frame = frames.get()
+                if frame is _END:
+                    return
+                if self.failure is None:
+                    try:
+                        writer.write(frame)
+                    except Exception as exc:  # noqa: BLE001 - raised in the caller's thread by VideoWriter
+                        self.failure = exc
+                del frame  # before task_done, so that a waiting caller finds its memory freed
+                frames.task_done()
+        finally:
+            self.done.set()
+
+    def put(self, frame: np.ndarray) -> None:
+        """Hand one frame over, once the previous one is encoded."""
+        self._frames.join()
+        self._frames.put(frame)
+
+    def finish(self, *, discard: bool = False) -> None:
+        """Encode the frame handed over (or drop it if ``discard``) and stop the thread; safe to repeat."""
+        if discard:
+            try:
+                self._frames.get_nowait()
+            except queue.Empty:
+                pass
+        if not self.done.is_set():
+            self._frames.put(_END)  # waits for a frame still waiting to be taken
+            self.done.wait()

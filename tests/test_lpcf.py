@@ -188,12 +188,18 @@ def test_shortcuts_stay_close_to_the_straightforward_tracker(monkeypatch):
     roi = Ellipse.circle(320, 240, 50)
     poses = similarity_path(120, (320, 240), scale_range=(0.8, 1.25), turns=0.5, radius_px=60)
     frames = list(synthetic_sequence(poses, roi, seed=3))
+    calls = []
+    translate = lpcf.LogPolarCorrelationTracker._translate
+    monkeypatch.setattr(lpcf.LogPolarCorrelationTracker, "_translate",
+                        lambda self, *args: calls.append(1) or translate(self, *args))
     _, shortcut = run(frames, roi)
+    with_shortcuts, calls[:] = len(calls), []
     # Without them: every iteration runs, and every learning step samples its own patch.
     monkeypatch.setattr(lpcf, "_REUSE_OFF_CENTRE", -1.0)
     for name in ("_AGREED_LOG_SCALE", "_AGREED_DEGREES", "_AGREED_SAMPLES"):
         monkeypatch.setattr(lpcf, name, -1.0)
     _, straight = run(frames, roi)
+    assert with_shortcuts < 0.8 * len(calls)  # the shortcuts do fire (measured: 245 against 357 patches)
     for (_, a), (_, b) in zip(shortcut, straight):
         assert math.hypot(a.centre[0] - b.centre[0], a.centre[1] - b.centre[1]) <= 0.5
         assert abs(a.scale / b.scale - 1) <= 0.01

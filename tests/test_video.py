@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import signal
 import threading
+import time
 
 import cv2
 import numpy as np
@@ -158,32 +160,79 @@ def test_writer_encodes_frames_in_order_in_the_background(tmp_path):
     with VideoWriter(tmp_path / "out.avi", 25.0) as writer:
         for frame in frames:
             writer.write(frame)
-        assert writer._thread is not None and writer._thread.is_alive()
-    assert writer._thread is None
+        assert writer._encoder is not None and not writer._encoder.done.is_set()
+    assert writer._encoder.done.is_set()
     with VideoReader(tmp_path / "out.avi") as reader:
         levels = [float(f.mean()) for _, _, f in reader]
     assert len(levels) == 25
     assert all(abs(level - 8 * i) <= 2 for i, level in enumerate(levels))  # JPEG rounding: 8 reads as 7
 
 
-def test_writer_encoder_failure_is_reported_and_leaves_nothing(tiny_video, tmp_path):
-    """An error inside the encoding thread surfaces in the caller as an OutputError; no file is left."""
+def test_writer_interrupted_while_closing_never_releases_under_the_encoder(tmp_path, monkeypatch):
+    """Ctrl-C while close() waits for the last frame's encoding, then abort() as the pipeline does: the OpenCV
+    writer is released only after that encoding ends (releasing it mid-encode crashed the process), and no file
+    is left."""
+    events = []
 
-    class Broken:
-        def __init__(self, real):
-            self.real = real
+    class SlowWriter:
+        def __init__(self, path, *args):
+            self.path = path
+            open(path, "wb").close()
+
+        def isOpened(self):
+            return True
 
         def write(self, frame):
-            raise cv2.error("encoder exploded")
+            events.append("write start")
+            time.sleep(0.3)
+            events.append("write end")
+
+        def release(self):
+            events.append("release")
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(video_module.cv2, "VideoWriter", SlowWriter)
+    writer = VideoWriter(tmp_path / "out.mp4", 25.0)
+    writer.write(np.zeros((48, 64, 3), np.uint8))
+    previous = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 0.05)
+        with pytest.raises(KeyboardInterrupt):
+            writer.close()
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+    writer.abort()
+    assert events == ["write start", "write end", "release"]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_writer_encoder_failure_is_reported_and_leaves_nothing(tiny_video, tmp_path, monkeypatch):
+    """An error inside the encoding thread surfaces in the caller as an OutputError; no file is left."""
+    real_writer = cv2.VideoWriter
+
+    class BreaksOnSecondFrame:
+        def __init__(self, *args):
+            self.real, self.count = real_writer(*args), 0
+
+        def isOpened(self):
+            return self.real.isOpened()
+
+        def write(self, frame):
+            self.count += 1
+            if self.count == 2:
+                raise cv2.error("encoder exploded")
+            self.real.write(frame)
 
         def release(self):
             self.real.release()
 
+    monkeypatch.setattr(video_module.cv2, "VideoWriter", BreaksOnSecondFrame)
     writer = VideoWriter(tmp_path / "out.mp4", 30.0)
-    writer.write(tiny_video.frames[0])
-    writer._writer = Broken(writer._writer)
     with pytest.raises(OutputError, match="encoder exploded"):
-        for frame in tiny_video.frames[1:]:
+        for frame in tiny_video.frames:
             writer.write(frame)
         writer.close()
     writer.abort()

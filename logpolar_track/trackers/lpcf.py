@@ -31,8 +31,8 @@ object was found to within a fraction of a sample) cut from one blurred crop, an
 that crop of the frame is converted to grey. About 1.1 ms a frame on one core (640x480, radius 50): the
 feature channels and their DFTs (in OpenCV's packed real spectra, see ``_PackedSpectra``) about half, the
 crop's grey conversion and anti-aliasing blur about a sixth, the log-polar matches and the learning step the
-rest. The shortcuts move results by tenths of a pixel at most (tests/test_lpcf.py compares them with the
-straightforward tracker).
+rest. The shortcuts move results by tenths of a pixel at most (tests/test_lpcf.py compares the skipped
+correlation and the reused patch with the straightforward tracker; the one blur per frame is not compared).
 
 References
 ----------
@@ -49,7 +49,7 @@ import numpy as np
 
 from ..features import patch_features
 from ..geometry import Ellipse
-from ..logpolar import LogPolarGrid, PhaseCorrelator, to_gray
+from ..logpolar import LogPolarGrid, PhaseCorrelator
 from .base import Similarity, SimilarityTracker, TrackState, register
 
 
@@ -159,7 +159,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.lp_prior = np.exp(-0.5 * ((d_log_scale / self.scale_sigma) ** 2 + (d_angle / self.rotation_sigma) ** 2)
                                ).astype(np.float32)
 
-        self.fill = float(cv2.mean(to_gray(frame, np.uint8))[0])
+        # The frame's mean grey (OpenCV's BGR weights), without converting the frame; float frames keep their range.
+        means = cv2.mean(frame)
+        self.fill = float(np.dot(means[:3], _GREY_WEIGHTS_BGR)) if frame.ndim == 3 else float(means[0])
         self._blur_cache = self._grey_cache = None
         self._blur_scale = 1.0
         self.frame_size = frame.shape[1], frame.shape[0]
@@ -573,6 +575,8 @@ class _PackedPhaseCorrelator:
         return cv2.idft(cross, flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE)
 
 
+#: Weights of blue, green and red in OpenCV's grey conversion (``cv2.COLOR_BGR2GRAY``).
+_GREY_WEIGHTS_BGR = (0.114, 0.587, 0.299)
 #: Extra pixels around a blurred crop, so that the learning step's patch can reuse it (see ``_blurred``).
 _SLACK_PX = 4
 _SLACK_FRACTION = 0.05

@@ -49,7 +49,7 @@ import numpy as np
 
 from ..features import patch_features
 from ..geometry import Ellipse
-from ..logpolar import LogPolarGrid, PhaseCorrelator
+from ..logpolar import LogPolarGrid, PhaseCorrelator, to_gray
 from .base import Similarity, SimilarityTracker, TrackState, register
 
 
@@ -102,7 +102,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
                "correlation for scale/rotation; motion prediction, confident-only learning, re-detection")
 
     #: Frames come as decoded (BGR or grey uint8): only the regions sampled are converted to grey float32 (see
-    #: :func:`_grey_region`), which is a fraction of a whole-frame conversion's time and memory.
+    #: :meth:`_grey`), which is a fraction of a whole-frame conversion's time and memory.
     gray_dtype = None
 
     def __init__(self, *, padding: float = 1.0, patch_samples: int = 64, learning_rate: float = 0.02,
@@ -441,13 +441,14 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         return self._grey(frame, x0, y0, x1, y1), x0, y0
 
     def _grey(self, frame, x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
-        """``frame[y0:y1, x0:x1]`` as grey float32 (:func:`_grey_region`), not to be modified. The frame's
-        first region (the blurred crop, the largest) usually covers the later ones, so it is kept and sliced."""
+        """``frame[y0:y1, x0:x1]`` as grey float32 (:func:`~logpolar_track.logpolar.to_gray`), not to be
+        modified. The frame's first region (the blurred crop, the largest) usually covers the later ones, so it
+        is kept and sliced."""
         cache = self._grey_cache
         if (cache is not None and cache[0] is frame and cache[1] <= x0 and cache[2] <= y0 and x1 <= cache[3]
                 and y1 <= cache[4]):
             return cache[5][y0 - cache[2]:y1 - cache[2], x0 - cache[1]:x1 - cache[1]]
-        grey = _grey_region(frame, x0, y0, x1, y1)
+        grey = to_gray(frame[y0:y1, x0:x1], np.float32)
         self._grey_cache = frame, x0, y0, x1, y1, grey
         return grey
 
@@ -585,16 +586,6 @@ _SLACK_FRACTION = 0.05
 _AGREED_LOG_SCALE, _AGREED_DEGREES, _AGREED_SAMPLES = 0.005, 0.5, 0.2
 #: Samples the object may sit off the last correlated patch's centre for that patch to be learnt from.
 _REUSE_OFF_CENTRE = 0.25
-
-
-def _grey_region(frame: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
-    """``frame[y0:y1, x0:x1]`` as grey float32 (0 to 255): OpenCV's BGR-to-grey conversion, pixel by pixel
-    the same as converting the whole frame."""
-    region = frame[y0:y1, x0:x1]
-    if region.ndim == 3:
-        # Copied first: converting the strided rows in place reads a frame that is not in cache 1.5x slower.
-        region = cv2.cvtColor(np.ascontiguousarray(region), cv2.COLOR_BGR2GRAY)
-    return region.astype(np.float32)
 
 
 def _agree(a: Similarity, b: Similarity) -> bool:

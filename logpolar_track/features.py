@@ -11,6 +11,7 @@ that one multi-channel ``cv2.GaussianBlur`` call blurs them all.
 
 from __future__ import annotations
 
+import math
 import cv2
 import numpy as np
 
@@ -34,7 +35,10 @@ def _orientation_channels(gray: np.ndarray, n_orient: int, blur_sigma: float) ->
     to_upper = magnitude * angle
     flat[base + lower_bin[whole]] = (magnitude - to_upper).ravel()
     flat[base + upper_bin[whole]] = to_upper.ravel()
-    cv2.GaussianBlur(channels, (0, 0), blur_sigma, dst=channels)
+    # The kernel is cut at 2 sigma (OpenCV's default for float images is 4): the blur only makes the channels
+    # tolerant of small shifts, and the shorter kernel halves its cost, a twentieth of lpcf's time per frame.
+    size = 2 * math.ceil(2 * blur_sigma) + 1
+    cv2.GaussianBlur(channels, (size, size), blur_sigma, dst=channels)
     return channels, np.float32(cv2.mean(magnitude)[0] + 1e-3)
 
 

@@ -11,6 +11,7 @@ import math
 
 import cv2
 import numpy as np
+import pytest
 
 from logpolar_track.geometry import Ellipse
 from logpolar_track.synthetic import Pose, random_texture, render_frame, similarity_path, synthetic_sequence
@@ -219,3 +220,32 @@ def test_colour_frames_track_exactly_as_their_grey_conversion():
     _, from_colour = run(colour, roi)
     _, from_grey = run([cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in colour], roi)
     assert [s for _, s in from_colour] == [s for _, s in from_grey]
+
+
+@pytest.mark.parametrize("scale, angle_deg", [(0.9, 0.0), (1.0, 30.0), (1.3, -60.0), (2.0, 10.0), (4.0, 100.0)])
+def test_shrinking_patches_sample_like_a_full_size_blur(scale, angle_deg):
+    """A patch whose samples are more than 1.5 px apart is cut from a crop reduced by ``cv2.pyrDown`` and blurred
+    for the rest; its samples match those of the whole frame blurred by half the sample spacing at full size
+    (RMS difference measured up to 3.9 % of the samples' spread at scales 0.75 to 5; bound 4.5 %)."""
+    from logpolar_track.trackers.base import Similarity
+
+    roi = Ellipse.circle(640, 480, 50)
+    # A large frame, so that even the largest patch stays inside it (the two blurs differ at the frame's edge).
+    frame = next(iter(synthetic_sequence([Pose(640, 480, 1.0, 0.0)], roi, size=(1280, 960), seed=5)))
+    tracker = create_tracker(DEFAULT_TRACKER)
+    tracker.init(frame, roi)
+    state = Similarity(642.3, 478.6, scale, angle_deg, 1.0)
+    tracker._blur_scale = scale
+    patch = tracker._patch(frame, state)
+
+    k = tracker.step * scale  # pixels between samples
+    assert k > 1.5
+    nx, ny = tracker.size
+    t = math.radians(angle_deg)
+    c, s = k * math.cos(t), k * math.sin(t)
+    sample_to_pixel = np.array([[c, s, state.cx - c * nx / 2 - s * ny / 2],
+                                [-s, c, state.cy + s * nx / 2 - c * ny / 2]])
+    blurred = cv2.GaussianBlur(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY).astype(np.float32), (0, 0), k / 2)
+    expected = cv2.warpAffine(blurred, sample_to_pixel, (nx, ny), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
+    rms = float(np.sqrt(np.mean((patch - expected) ** 2)))
+    assert rms <= 0.045 * float(expected.std())

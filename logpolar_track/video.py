@@ -185,7 +185,10 @@ class VideoReader:
             yield index, self.time_of(index), item
 
     def _decode(self) -> None:
-        """Background thread: decode frames into the bounded queue until the end or :meth:`close`."""
+        """Background thread: decode frames into the bounded queue until the end or :meth:`close`.
+
+        Once started, the thread owns the capture and releases it as it ends, so that a :meth:`close` whose
+        wait is interrupted (Ctrl-C) can neither release it mid-read nor leave it open."""
         try:
             while not self._stop.is_set():
                 ok, frame = self._cap.read()  # releases the GIL while FFmpeg decodes
@@ -196,6 +199,8 @@ class VideoReader:
         except Exception as exc:  # noqa: BLE001 - handed to the consumer, which raises it as a VideoError
             self._put(exc)
             return
+        finally:
+            self._cap.release()
         self._put(_END)
 
     def _put(self, item) -> bool:
@@ -213,10 +218,11 @@ class VideoReader:
             return
         self._closed = True
         self._stop.set()
-        if self._thread is not None:
-            self._thread.join()
-        self._cap.release()
         self.first_frame = None
+        if self._thread is None:
+            self._cap.release()
+        else:
+            self._thread.join()  # the thread releases the capture
         # Drop frames still queued so their memory is freed now.
         while True:
             try:

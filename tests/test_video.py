@@ -68,6 +68,28 @@ def test_close_early_stops_the_decoding_thread(tiny_video):
     assert not any(t.name.startswith("lptrack-read") and t.is_alive() for t in threading.enumerate())
 
 
+def test_close_interrupted_while_waiting_still_releases_the_file(tiny_video, monkeypatch):
+    """Ctrl-C while close() waits for the decoding thread: the thread, which owns the capture once started,
+    still stops and releases it (before, close() released it itself after the wait, so an interrupted wait left
+    the file open)."""
+    reader = VideoReader(tiny_video.path, read_ahead=2)
+    frames = iter(reader)
+    next(frames), next(frames)
+    thread = reader._thread
+    wait = threading.Thread.join
+
+    def interrupted_join(self, timeout=None):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(threading.Thread, "join", interrupted_join)
+    with pytest.raises(KeyboardInterrupt):
+        reader.close()
+    monkeypatch.setattr(threading.Thread, "join", wait)
+    thread.join(timeout=10)
+    assert not thread.is_alive()
+    assert not reader._cap.isOpened()
+
+
 def test_reader_iterates_once(tiny_video):
     with VideoReader(tiny_video.path) as reader:
         list(reader)

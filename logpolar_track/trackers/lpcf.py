@@ -123,7 +123,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
     summary = ("default: correlation filter for the centre in the object's frame + log-polar phase "
                "correlation for scale/rotation; motion prediction, confident-only learning, re-detection")
 
-    #: Frames come as decoded (BGR or grey uint8): only the regions sampled are converted to grey float32 (see
+    #: Frames come as decoded (BGR or grey uint8): only the regions sampled are converted to grey (see
     #: :meth:`_grey`), which is a fraction of a whole-frame conversion's time and memory.
     gray_dtype = None
 
@@ -451,8 +451,11 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         level = 0
         while (level < 2 and variance - (4 ** (level + 1) - 1) / 2 >= 0.1 * 4 ** (level + 1)
                and min(image.shape[:2]) >= 4):
+            # The first halving is made on the 8-bit grey crop, rounding to whole grey levels (0.3 RMS): half
+            # the cost of halving it in float, and the float conversion is then of a quarter of the pixels.
             image = cv2.pyrDown(image)
             level += 1
+        image = image.astype(np.float32, copy=False)
         sigma = math.sqrt(variance - (4 ** level - 1) / 2) / 2 ** level  # pixels of the reduced crop
         if sigma > 0.25:
             # The kernel is cut at 2.5 sigma (OpenCV's default for float images is 4): enough against aliasing,
@@ -493,17 +496,17 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         y0 = min(max(int(math.floor(top)), 0), height - 1)
         x1 = min(max(int(math.ceil(right)) + 1, x0 + 1), width)
         y1 = min(max(int(math.ceil(bottom)) + 1, y0 + 1), height)
-        return self._grey(frame, x0, y0, x1, y1), x0, y0
+        return self._grey(frame, x0, y0, x1, y1).astype(np.float32), x0, y0
 
     def _grey(self, frame, x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
-        """``frame[y0:y1, x0:x1]`` as grey float32 (:func:`~logpolar_track.logpolar.to_gray`), not to be
-        modified. The frame's first region (the blurred crop, the largest) usually covers the later ones, so it
-        is kept and sliced."""
+        """``frame[y0:y1, x0:x1]`` as grey (:func:`~logpolar_track.logpolar.to_gray`): uint8 for uint8 frames,
+        float32 otherwise (float frames keep their range); not to be modified. The frame's first region (the
+        blurred crop, the largest) usually covers the later ones, so it is kept and sliced."""
         cache = self._grey_cache
         if (cache is not None and cache[0] is frame and cache[1] <= x0 and cache[2] <= y0 and x1 <= cache[3]
                 and y1 <= cache[4]):
             return cache[5][y0 - cache[2]:y1 - cache[2], x0 - cache[1]:x1 - cache[1]]
-        grey = to_gray(frame[y0:y1, x0:x1], np.float32)
+        grey = to_gray(frame[y0:y1, x0:x1], np.uint8 if frame.dtype == np.uint8 else np.float32)
         self._grey_cache = frame, x0, y0, x1, y1, grey
         return grey
 

@@ -394,8 +394,8 @@ def format_report(doc: dict) -> str:
     if cpu is not None:
         core += f"; tracker CPU time / wall time <= {cpu:.2f}"
     lines += ["", core + ".",
-              f"Tracker: median update() on decoded frames, least of {doc['parameters']['repeats']} passes; end to end: least of "
-              f"{e['repeats']} runs, decoding in the reader's background thread.",
+              f"Tracker: median update() on decoded frames, least of {doc['parameters']['repeats']} passes; "
+              f"end to end: least of {e['repeats']} runs, decoding in the reader's background thread.",
               f"Machine: {m['cpu_model']}, {m['cpu_count']} logical CPUs; Python {v['python']}, "
               f"OpenCV {v['opencv']} ({v['opencv_package']}), NumPy {v['numpy']}, lptrack {v['lptrack']}."]
     return "\n".join(lines) + "\n"

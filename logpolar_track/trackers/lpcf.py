@@ -68,8 +68,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
     label_sigma : float
         Width of the filter's Gaussian target response, as a fraction of the object's size (the geometric
         mean of its box's sides). 1/16, as in DSST (Danelljan et al., BMVC 2014): the 7 real sequences'
-        10-start mean IoU AUC 0.404 (0.1, KCF's value) -> 0.415 (0.055 -> 0.405, 0.07 -> 0.415, 0.08 -> 0.406);
-        sample_videos 0.939 -> 0.944, median rotation error 0.71 -> 0.42 deg.
+        10-start mean IoU AUC (with psr_learn 7) 0.404 (0.1, KCF's value) -> 0.415 (0.055 -> 0.405,
+        0.07 -> 0.415, 0.08 -> 0.406); sample_videos 0.939 -> 0.944, median rotation error 0.71 -> 0.42 deg.
     lp_learning_rate : float
         Running-average weight of a confident frame in the log-polar model (0 to 1).
     n_rho, n_theta : int
@@ -132,8 +132,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
                  lp_learning_rate: float = 0.02, n_rho: int = 32, n_theta: int = 64, lost_threshold: float = 0.3,
                  psr_learn: float = 14.0, lp_min_height: float = 0.1, max_scale_step: float = 0.1,
                  max_rotation_step: float = 20.0, regularisation: float = 1e-2, label_sigma: float = 0.0625,
-                 velocity_damping: float = 0.8, window_power: float = 1.0,
-                 scale_sigma: float = 0.05, rotation_sigma: float = 10.0, anchor_weight: float = 0.0, iterations: int = 2,
+                 velocity_damping: float = 0.8, window_power: float = 1.0, scale_sigma: float = 0.05,
+                 rotation_sigma: float = 10.0, anchor_weight: float = 0.0, iterations: int = 2,
                  level_rate: float = 0.1, redetect_after: int = 5, trust_low: float = 0.7, trust_high: float = 0.9,
                  learn_every: int = 2, lp_extent: float = 1.6, drop_ratio: float = 0.3):
         super().__init__(lost_threshold=lost_threshold)
@@ -452,8 +452,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         level = 0
         while (level < 2 and variance - (4 ** (level + 1) - 1) / 2 >= 0.1 * 4 ** (level + 1)
                and min(image.shape[:2]) >= 4):
-            # The first halving is made on the 8-bit grey crop, rounding to whole grey levels (0.3 RMS): half
-            # the cost of halving it in float, and the float conversion is then of a quarter of the pixels.
+            # Halved as 8-bit grey, rounding to whole grey levels (0.3 RMS each time): half the cost of halving
+            # in float, and the float conversion is then of a quarter of the pixels or fewer.
             image = cv2.pyrDown(image)
             level += 1
         image = image.astype(np.float32, copy=False)

@@ -497,7 +497,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         y0 = min(max(int(math.floor(top)), 0), height - 1)
         x1 = min(max(int(math.ceil(right)) + 1, x0 + 1), width)
         y1 = min(max(int(math.ceil(bottom)) + 1, y0 + 1), height)
-        return self._grey(frame, x0, y0, x1, y1).astype(np.float32), x0, y0
+        return self._grey(frame, x0, y0, x1, y1).astype(np.float32, copy=False), x0, y0
 
     def _grey(self, frame, x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
         """``frame[y0:y1, x0:x1]`` as grey (:func:`~logpolar_track.logpolar.to_gray`): uint8 for uint8 frames,

@@ -157,6 +157,70 @@ def test_recovers_after_a_full_occlusion():
     assert ok[28:].all() and errors[28:].max() <= 1.5  # from the first uncovered frame on
 
 
+def _half_covered(seed, frames_total=70, first=20, last=50):
+    """A disc of radius 50 px turning 0.8 degrees and growing 0.3 % a frame; from ``first`` to ``last`` a
+    rectangle of other texture covers its left half (to 3 px short of the centre)."""
+    roi = Ellipse.circle(320, 240, 50)
+    poses = [Pose(320 + 0.3 * i, 240, 1.0 + 0.003 * i, 0.8 * i) for i in range(frames_total)]
+    frames = list(synthetic_sequence(poses, roi, size=(640, 480), seed=seed))
+    cover = random_texture(480, 640, np.random.default_rng(seed + 100))
+    for i in range(first, last):
+        right, top, bottom = int(poses[i].cx) - 3, int(poses[i].cy) - 70, int(poses[i].cy) + 70
+        frames[i] = frames[i].copy()
+        frames[i][top:bottom, right - 80:right] = cover[top:bottom, right - 80:right]
+    return roi, poses, frames
+
+
+@pytest.mark.parametrize("seed", [10, 11, 14])
+def test_occlusion_mask_hides_the_covered_half_and_keeps_its_model(seed):
+    """``lpcf-masked`` marks the log-polar sectors facing the cover as hidden and those facing away as visible,
+    does not learn the cover, and is back on the object once it is uncovered (measured on seeds 6-15: all ten
+    back within 0.7 px and 0.35 degrees; ``lpcf`` without masks lost seed 11 for good: 13 px, 35 degrees)."""
+    roi, poses, frames = _half_covered(seed)
+    tracker = create_tracker("lpcf-masked")
+    tracker.init(frames[0], roi)
+    covered, uncovered, results = [], [], []
+    for i, frame in enumerate(frames[1:], 1):
+        results.append(tracker.update(frame))
+        if 25 <= i < 50 and tracker.block_visibility is not None:
+            # Sector j's middle direction on screen: (j + 1/2) * 45 degrees counter-clockwise from the ROI's axis,
+            # turned with the object. The innermost band, within a few pixels of the centre, is left out.
+            bands, sectors = tracker.block_visibility.shape
+            screen = np.radians((np.arange(sectors) + 0.5) * 360 / sectors + results[-1][1].rotation_deg)
+            visibility = tracker.block_visibility[1:]
+            covered.append(visibility[:, np.cos(screen) < -0.3].mean())
+            uncovered.append(visibility[:, np.cos(screen) > 0.3].mean())
+    assert len(covered) >= 20  # the mask is on through the occlusion
+    assert np.median(covered) <= 0.3 and np.median(uncovered) >= 0.7
+    after = results[55:]  # frames 56 on
+    truth = poses[56:]
+    assert all(ok for ok, _ in after)
+    assert np.median(centre_errors(after, truth)) <= 1.0
+    assert np.median([abs(s.scale / p.scale - 1) for (_, s), p in zip(after, truth)]) <= 0.02
+    assert np.median([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(after, truth)]) <= 1.0
+    if seed == 11:  # without the mask, the model learns the cover and the tracker does not come back
+        _, unmasked = run(frames, roi)
+        assert np.median(centre_errors(unmasked[55:], truth)) > 5.0
+
+
+def test_redetection_does_not_jump_to_a_patch_of_background():
+    """While lost, a patch elsewhere with a sharper filter response is taken only if it also matches the
+    object's log-polar appearance well enough not to be a drop itself. Here the cover throws the filter 17 px
+    off the object: re-detection used to jump 150 then 300 px into the background and stay there; now the
+    search stays near the object (reported lost), and the object is tracked again within 10 frames of being
+    uncovered (measured: 8; 0.3 px, 0.1 degrees off)."""
+    roi, poses, frames = _half_covered(9)
+    tracker = create_tracker("lpcf")
+    tracker.init(frames[0], roi)
+    results, searched = [], []
+    for frame, pose in zip(frames[1:], poses[1:]):
+        results.append(tracker.update(frame))
+        searched.append(math.hypot(tracker.cursor.cx - pose.cx, tracker.cursor.cy - pose.cy))
+    assert max(searched[19:50]) <= 25.0
+    assert not any(ok for ok, _ in results[24:50])
+    assert all(ok for ok, _ in results[59:]) and np.median(centre_errors(results[59:], poses[60:])) <= 1.0
+
+
 def test_accuracy_on_a_gentle_similarity_path():
     """The default tracker on a generated sequence: 120 frames of 640x480, circle of radius 50, the centre
     circling 60 px, scale 0.8-1.25, half a turn. Bounds: the issue's targets for scale (1.5 %) and, with

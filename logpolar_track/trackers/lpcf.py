@@ -19,7 +19,9 @@ Per frame:
    Only frames with a sharp filter response (peak-to-sidelobe ratio) and no sudden drop of the match update
    the filter and the log-polar model (running averages), so occluders and distractors are not learnt. After
    a few frames of such a drop the object is searched for in patches around the last position, a ring that
-   widens each frame (re-detection).
+   widens each frame (re-detection); a patch found there is taken only if it matches the object's log-polar
+   appearance too. With ``occlusion_mask`` (``lpcf-masked``), parts of the log-polar image that stop matching
+   are left out of steps 3 and 5.
 
 This is the structure of LDES (Li, Zhu, Hoi, Hoi, Zhu, "Robust estimation of similarity transformation for
 visual object tracking", AAAI 2019), with a simpler filter, and of the thesis' future work (decoupled
@@ -108,6 +110,11 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         (``1 - (1 - rate) ** learn_every``). Sparse updates, as in ECO (Danelljan et al., CVPR 2017), halve the
         learning cost; with 2 the 7 real sequences' 10-start mean IoU AUC was 0.357 against 0.330 learning on
         every frame (within the 0.03 noise), sample_videos unchanged (0.928), and lpcf 8 % faster.
+    occlusion_mask : bool
+        Leave blocks of the log-polar image that stop matching the model (an occluder over part of the object)
+        out of the scale/rotation match and out of the model's update (see :meth:`_update_mask`). Off by
+        default, on in ``lpcf-masked``: it helps objects partly covered for a while and costs accuracy on the
+        real sequences (see :class:`MaskedLogPolarCorrelationTracker`).
     trust_low, trust_high : float
         Log-polar peak heights (0 to 1) between which the sub-bin offset is read increasingly from the raw
         match surface instead of the prior-weighted one (the prior still picks the bin). A weak peak (real,
@@ -135,7 +142,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
                  velocity_damping: float = 0.8, window_power: float = 1.0, scale_sigma: float = 0.05,
                  rotation_sigma: float = 10.0, anchor_weight: float = 0.0, iterations: int = 2,
                  level_rate: float = 0.1, redetect_after: int = 5, trust_low: float = 0.7, trust_high: float = 0.9,
-                 learn_every: int = 2, lp_extent: float = 1.6, drop_ratio: float = 0.3):
+                 learn_every: int = 2, lp_extent: float = 1.6, drop_ratio: float = 0.3, occlusion_mask: bool = False):
         super().__init__(lost_threshold=lost_threshold)
         self.padding = float(padding)
         self.patch_samples = int(patch_samples)
@@ -158,6 +165,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.learn_every = max(1, int(learn_every))
         self.lp_extent = float(lp_extent)
         self.drop_ratio = float(drop_ratio)
+        self.occlusion_mask = bool(occlusion_mask)
 
     # -- set-up -----------------------------------------------------------------------------------------
     def _start(self, frame: np.ndarray, roi: Ellipse) -> None:
@@ -200,6 +208,11 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self._filter()
         self.lp_model = self._log_polar(frame, first)
         self.lp_anchor = self.lp_model.copy()
+        #: Occlusion mask (with ``occlusion_mask``): visibility, 0 to 1, of each block of rings x sectors of the
+        #: log-polar image, and the same per sample; None while all of the object shows (or none of it).
+        self.block_visibility = self.lp_mask = None
+        self._block_usual = self._block_spread = None
+        self._lp_sample = None
         self._lp_references()
         self.velocity = np.zeros(2)  # pixels per frame
         self.match_level = 1.0  # the first frame matches itself perfectly
@@ -251,10 +264,13 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         refined = Similarity(min(max(moved.cx, 0.0), width - 1.0), min(max(moved.cy, 0.0), height - 1.0),
                              moved.scale, moved.rotation_deg, match)
         self.cursor = refined
+        dropped = match < self.drop_ratio * self.match_level
+        if self.occlusion_mask:
+            self._update_mask(dropped)
         # Real objects deform and change lighting, so their match slowly weakens; what makes the tracker stop
         # learning and start searching is a sudden drop below its running level. (Judged on the match alone,
         # deforming objects would stop being learnt: the 7 real sequences' IoU AUC fell from 0.41 to 0.31-0.36.)
-        if match < self.drop_ratio * self.match_level:
+        if dropped:
             self.misses += 1
             self.velocity[:] = 0.0
             return refined
@@ -289,6 +305,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         """While lost, also search patches tiled around the last position (a ring that widens each frame)."""
         reach = min(self.misses - self.redetect_after + 1, 4)
         nx, ny = self.size
+        found = None
         for i in range(-reach, reach + 1):
             for j in range(-reach, reach + 1):
                 if max(abs(i), abs(j)) != reach:
@@ -298,9 +315,18 @@ class LogPolarCorrelationTracker(SimilarityTracker):
                 candidate = Similarity(state.cx + offset[0], state.cy + offset[1], state.scale,
                                        state.rotation_deg, state.score)
                 moved, cand_psr, cand_peak = self._translate(frame, candidate)
-                if cand_psr > psr:
-                    best, psr, peak = moved, cand_psr, cand_peak
-        return best, psr, peak
+                if cand_psr > psr and (found is None or cand_psr > found[1]):
+                    found = moved, cand_psr, cand_peak
+        if found is None:
+            return best, psr, peak
+        # A sharper response elsewhere must also match the object (filter peak x log-polar height) better than
+        # the estimate here, and well enough not to count as a drop itself: a patch of background that only
+        # beats a misplaced estimate is no reason to jump there (seen jumping 300 px off a half-covered object).
+        _, here = self._scale_rotate(frame, best)
+        _, there = self._scale_rotate(frame, found[0])
+        if found[2] * there <= max(peak * here, (self.drop_ratio * self.match_level) ** 2):
+            return best, psr, peak
+        return found
 
     def _scale_rotate(self, frame, state: Similarity) -> tuple[Similarity, float]:
         """Change of scale and angle from the log-polar match at ``state``'s centre, and the match height.
@@ -315,10 +341,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         # Against the learnt model (follows appearance) and the first frame's image (cannot drift): a model
         # learnt at slightly wrong scales would otherwise make the error self-consistent.
         if self.packed_correlator is not None:
-            current = self.packed_correlator.spectrum(image)
+            current = self.packed_correlator.spectrum(image, self.lp_mask)
             surfaces = [self.packed_correlator.correlate(reference, current) for reference in self._references]
         else:
-            surfaces = self.correlator.correlate(self._references, self.correlator.spectrum(image[None]))
+            surfaces = self.correlator.correlate(self._references, self.correlator.spectrum(image[None], self.lp_mask))
         if self.anchor_weight == 0.0:  # the anchor's surface would be multiplied by 0 (and is not computed)
             surface = surfaces[0]
         else:
@@ -334,11 +360,13 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             d_rho += trust * (raw_rho - d_rho)
             d_theta += trust * (raw_theta - d_theta)
         if height < self.lp_min_height:
+            self._lp_sample = image, 0.0, 0.0
             return state, height
         log_scale = d_rho * self.grid.log_step
         rotation = d_theta * self.grid.degrees_per_bin
         log_scale = float(np.clip(log_scale, -self.max_scale_step, self.max_scale_step))
         rotation = float(np.clip(rotation, -self.max_rotation_step, self.max_rotation_step))
+        self._lp_sample = image, log_scale / self.grid.log_step, rotation / self.grid.degrees_per_bin
         return Similarity(state.cx, state.cy, state.scale * math.exp(log_scale), state.rotation_deg + rotation,
                           state.score), height
 
@@ -357,8 +385,62 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self._filter()
         if lp_height >= self.lp_min_height:
             lp_rate = 1 - (1 - self.lp_learning_rate) ** self.learn_every
-            self.lp_model = (1 - lp_rate) * self.lp_model + lp_rate * self._log_polar(frame, state)
+            image = self._log_polar(frame, state)
+            if self.lp_mask is None:
+                self.lp_model = (1 - lp_rate) * self.lp_model + lp_rate * image
+            else:  # occluded blocks keep the model as it was
+                self.lp_model = self.lp_model + (lp_rate * self.lp_mask) * (image - self.lp_model)
             self._lp_references()
+
+    def _update_mask(self, dropped: bool) -> None:
+        """Occlusion mask from the frame's last log-polar image.
+
+        The image is compared with the model, moved by the change of scale and angle just measured, block by
+        block (``_MASK_BLOCKS`` rings x sectors): the residual is one minus the blocks' correlation. Each block
+        keeps a running mean and spread of its residual while it shows; a block whose residual rises
+        ``_MASK_Z`` spreads above its usual level is hidden (visibility falls from 1 to 0 between the two). A
+        hidden block's usual level still follows it slowly, so that a lasting change is in time taken for the
+        object's own appearance and learnt, rather than masked for ever.
+        """
+        bands, sectors = _MASK_BLOCKS
+        image, shift_rho, shift_theta = self._lp_sample
+        # image[k, j] ~ model[k - shift_rho, j - shift_theta]
+        move = np.array([[1.0, 0.0, shift_theta], [0.0, 1.0, shift_rho]])
+        model = cv2.warpAffine(self.lp_model, move, (self.n_theta, self.n_rho), flags=cv2.INTER_LINEAR,
+                               borderMode=cv2.BORDER_WRAP)
+
+        def block_mean(x):
+            return cv2.resize(x, (sectors, bands), interpolation=cv2.INTER_AREA)
+
+        mean_i, mean_m = block_mean(image), block_mean(model)
+        var_i = np.maximum(block_mean(cv2.multiply(image, image)) - mean_i * mean_i, 0.0)
+        var_m = np.maximum(block_mean(cv2.multiply(model, model)) - mean_m * mean_m, 0.0)
+        cov = block_mean(cv2.multiply(image, model)) - mean_i * mean_m
+        floor = 0.01 * float(var_m.mean()) + 1e-6  # blocks flat in both match, whatever their level
+        residual = 1.0 - (cov + floor) / np.sqrt((var_i + floor) * (var_m + floor))
+        if self._block_usual is None:
+            self._block_usual = residual
+            self._block_spread = np.full_like(residual, _MASK_SPREAD ** 2)
+        excess = residual - self._block_usual
+        z = excess / np.sqrt(self._block_spread + _MASK_SPREAD ** 2)
+        low, high = _MASK_Z
+        visibility = np.clip((high - z) / (high - low), 0.0, 1.0).astype(np.float32)
+        if dropped or visibility.mean() < 0.25:
+            # None (or too little) of the object matches: no mask can help, and the frame is not learnt.
+            self.block_visibility = self.lp_mask = None
+            return
+        seen = visibility >= 0.5
+        rate = np.where(seen, _MASK_RATE, 0.2 * _MASK_RATE)
+        self._block_usual = self._block_usual + rate * excess
+        self._block_spread = np.where(seen, (1 - rate) * (self._block_spread + rate * excess * excess),
+                                      self._block_spread)
+        if visibility.min() >= 1.0:
+            self.block_visibility = self.lp_mask = None
+        else:
+            # Bilinear, not blocky: sharp block edges in the masked image correlate with the model's structure
+            # (with an earlier threshold rule, the 7 real sequences' 10-start mean IoU AUC: 0.375 blocky, 0.424 smooth).
+            self.block_visibility = visibility
+            self.lp_mask = cv2.resize(visibility, (self.n_theta, self.n_rho), interpolation=cv2.INTER_LINEAR)
 
     def _filter(self) -> None:
         """The filter ``numerator / (denominator + regularisation)``, ready for :meth:`_PackedSpectra.correlate`."""
@@ -617,10 +699,12 @@ class _PackedPhaseCorrelator:
         self.window_sum = float(correlator.window.sum())
         self.weight = self.packed.expand(correlator._scaled_weight)
 
-    def spectrum(self, image: np.ndarray) -> np.ndarray:
+    def spectrum(self, image: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
         """Packed spectrum of one log-polar image, windowed and normalised as ``PhaseCorrelator.spectrum``."""
-        centred = image - np.float32(float((image * self.window).sum()) / self.window_sum)
-        centred *= self.window
+        window = self.window if mask is None else self.window * mask
+        total = self.window_sum if mask is None else float(window.sum())
+        centred = image - np.float32(float((image * window).sum()) / total)
+        centred *= window
         centred /= np.float32(math.sqrt(float(np.vdot(centred, centred))) + 1e-6)
         return cv2.dft(centred)
 
@@ -645,6 +729,13 @@ _SLACK_FRACTION = 0.05
 _AGREED_LOG_SCALE, _AGREED_DEGREES, _AGREED_SAMPLES = 0.005, 0.5, 0.2
 #: Samples the object may sit off the last correlated patch's centre for that patch to be learnt from.
 _REUSE_OFF_CENTRE = 0.25
+#: Occlusion mask (``occlusion_mask``, see ``_update_mask``): blocks (rings, sectors) of the log-polar image;
+#: residual rise, in spreads of the block's usual residual, where a block starts and ends being hidden; least
+#: spread (the residual is one minus a correlation); running-average weight of a frame in a block's usual level.
+_MASK_BLOCKS = (4, 8)
+_MASK_Z = (2.5, 4.0)
+_MASK_SPREAD = 0.05
+_MASK_RATE = 0.05
 
 
 def _agree(a: Similarity, b: Similarity) -> bool:
@@ -716,3 +807,23 @@ def _surface_peak(surface: np.ndarray, values: np.ndarray | None = None) -> tupl
     d_rho = (k + dk + n_rho / 2) % n_rho - n_rho / 2
     d_theta = (j + dj + n_theta / 2) % n_theta - n_theta / 2
     return d_rho, d_theta, min(max(centre, 0.0), 1.0)
+
+
+@register
+class MaskedLogPolarCorrelationTracker(LogPolarCorrelationTracker):
+    """``lpcf`` with occlusion masks in the log-polar domain (``occlusion_mask=True``): blocks of rings x
+    sectors that stop matching the model are left out of the scale/rotation match and are not learnt.
+
+    For objects that stay partly covered for a while. A disc of radius 50 px turning 0.8 degrees a frame,
+    its left half covered by other texture for 40 frames (8 textures): tracked on every frame after the cover
+    goes in 7 of 8 runs, against 4 of 8 for ``lpcf`` (covered for 30 frames: 10 of 10 against 9 of 10). On the 7
+    real benchmark sequences, which show little partial occlusion, it is less accurate: mean IoU AUC 0.440
+    against 0.492 from the ground-truth box, 0.404 against 0.439 over ten starts. It masks parts that deform
+    too (toy 0.689 -> 0.322), and a masked match scores higher, so more doubtful frames are learnt.
+    """
+
+    name = "lpcf-masked"
+    summary = "lpcf with occlusion masks in the log-polar domain: for objects partly covered for a while"
+
+    def __init__(self, *, occlusion_mask: bool = True, **params):
+        super().__init__(occlusion_mask=occlusion_mask, **params)

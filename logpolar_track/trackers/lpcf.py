@@ -209,8 +209,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self._filter()
         self.lp_model = self._log_polar(frame, first)
         self.lp_anchor = self.lp_model.copy()
-        #: Occlusion mask (with ``occlusion_mask``): visibility, 0 to 1, of each block of rings x sectors of the
-        #: log-polar image, and the same per sample; None while all of the object shows (or none of it).
+        #: Occlusion mask (with ``occlusion_mask``): visibility, 0 to 1, of each block of the log-polar image
+        #: ``(bands, sectors)``, and the same per sample ``(n_rho, n_theta)``; None while all of the object shows
+        #: (or none of it).
         self.block_visibility = self.lp_mask = None
         self._block_usual = self._block_spread = None
         self._lp_sample = None
@@ -397,7 +398,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         keeps a running mean and spread of its residual while it shows; a block whose residual rises
         ``_MASK_Z`` spreads above its usual level is hidden (visibility falls from 1 to 0 between the two). A
         hidden block's usual level still follows it slowly, so that a lasting change is in time taken for the
-        object's own appearance and learnt, rather than masked for ever.
+        object's own appearance rather than masked for ever.
         """
         bands, sectors = _MASK_BLOCKS
         image, shift_rho, shift_theta = self._lp_sample
@@ -423,7 +424,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         low, high = _MASK_Z
         visibility = np.clip((high - z) / (high - low), 0.0, 1.0).astype(np.float32)
         if dropped or visibility.mean() < 0.25:
-            # None (or too little) of the object matches: no mask can help, and the frame is not learnt.
+            # None (or too little) of the object matches: no mask can help.
             self.block_visibility = self.lp_mask = None
             return
         seen = visibility >= 0.5
@@ -435,7 +436,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self.block_visibility = self.lp_mask = None
         else:
             # Bilinear, not blocky: sharp block edges in the masked image correlate with the model's structure
-            # (with an earlier threshold rule, the 7 real sequences' 10-start mean IoU AUC: 0.375 blocky, 0.424 smooth).
+            # (measured with an earlier threshold rule: real sequences, 10 starts, 0.375 blocky, 0.424 smooth).
             self.block_visibility = visibility
             self.lp_mask = cv2.resize(visibility, (self.n_theta, self.n_rho), interpolation=cv2.INTER_LINEAR)
 

@@ -432,7 +432,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self._block_usual = self._block_usual + rate * excess
         self._block_spread = np.where(seen, (1 - rate) * (self._block_spread + rate * excess * excess),
                                       self._block_spread)
-        if (visibility < 0.5).mean() < _MASK_MIN_HIDDEN:
+        if (~seen).mean() < _MASK_MIN_HIDDEN:
             # A few scattered blocks stop matching when an object deforms or turns out of plane; an occluder
             # hides a region. Masking the scattered ones too cost the real sequences (10-start mean IoU AUC
             # 0.4375 with this rule, 0.415 without; toy 0.616 against 0.517).
@@ -732,7 +732,7 @@ _AGREED_LOG_SCALE, _AGREED_DEGREES, _AGREED_SAMPLES = 0.005, 0.5, 0.2
 _REUSE_OFF_CENTRE = 0.25
 #: Occlusion mask (``occlusion_mask``, see ``_update_mask``): blocks (rings, sectors) of the log-polar image;
 #: residual rise, in spreads of the block's usual residual, where a block starts and ends being hidden; least
-#: spread (the residual is one minus a correlation); running-average weight of a frame in a block's usual level;
+#: spread (the residual is one minus a correlation); running-average weight of a frame in a block's usual level.
 _MASK_BLOCKS = (4, 8)
 _MASK_Z = (2.5, 4.0)
 _MASK_SPREAD = 0.05

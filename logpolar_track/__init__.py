@@ -10,7 +10,7 @@ from .geometry import Ellipse, parse_roi
 from .trackers import Tracker, TrackState, create_tracker, tracker_names
 
 try:
-    __version__ = version("lptrack")
+    __version__ = version("logpolar-track")
 except PackageNotFoundError:  # running from a source tree that was not installed
     __version__ = "0+unknown"
 

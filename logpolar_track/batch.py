@@ -33,7 +33,7 @@ from .geometry import ROI_SYNTAX, Ellipse, parse_roi
 from .pipeline import CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, run_video
 from .results import FORMATS, header_line
 from .trackers import tracker_class
-from .video import CODECS_BY_EXTENSION, temporary_path
+from .video import CODECS_BY_EXTENSION, make_output_folder, remove_empty_folders, temporary_path
 
 #: File extensions searched for in input folders (case-insensitive).
 VIDEO_EXTENSIONS: tuple[str, ...] = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".ts",
@@ -88,6 +88,7 @@ class VideoJob:
     data_format: str = "csv"
     overwrite: bool = False
     stream: bool = False
+    max_frames: int | None = None
 
 
 @dataclass(frozen=True)
@@ -289,11 +290,21 @@ class BatchPlan:
     jobs: list[VideoJob]
     order: list[str]
     settled: dict[str, VideoOutcome]
+    #: The folder the outputs mirror the inputs under (None: no files, e.g. streamed rows only).
+    out_dir: Path | None = None
+
+    def output_folders(self, job: VideoJob) -> list[Path]:
+        """The folders below :attr:`out_dir` that ``job``'s outputs go in, innermost last."""
+        folders = set()
+        for out in (job.video_out, job.csv_out):
+            if out is not None and self.out_dir is not None:
+                folders.update(p for p in [out.parent, *out.parent.parents] if self.out_dir in p.parents)
+        return sorted(folders, key=lambda p: len(p.parts))
 
 
 def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entries: Iterable[RoiEntry] = (),
-               tracker: str = DEFAULT_TRACKER, start_frame: int = 0, out_dir=".", video: bool = True,
-               stream: bool = False, data_format: str = "csv", overwrite: bool = False,
+               tracker: str = DEFAULT_TRACKER, start_frame: int = 0, max_frames: int | None = None, out_dir=".",
+               video: bool = True, stream: bool = False, data_format: str = "csv", overwrite: bool = False,
                skip_existing: bool = False) -> BatchPlan:
     """Give every video its ROI, start frame, tracker and outputs.
 
@@ -308,6 +319,8 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         Per-video ROIs (:func:`read_roi_file`); their start frame and tracker override the defaults.
     tracker, start_frame
         Defaults for videos whose entry does not say.
+    max_frames : int, optional
+        Frames to track per video, the start frame included (None: to the end).
     out_dir : path
         Outputs go to ``out_dir/<path relative to the input folder>/<stem>.lptrack.{mp4,csv}``; a file name
         shared by two inputs (``a.mp4`` and ``a.avi``) keeps its extension instead: ``a.mp4.lptrack.csv``.
@@ -342,7 +355,7 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         job = VideoJob(label=label, video=item.path.resolve(), roi=entry.roi if entry else roi,
                        tracker=(entry.tracker if entry and entry.tracker else tracker),
                        start_frame=(entry.start_frame if entry and entry.start_frame is not None else start_frame),
-                       video_out=video_out, csv_out=csv_out, data_format=data_format,
+                       max_frames=max_frames, video_out=video_out, csv_out=csv_out, data_format=data_format,
                        # A partial set (a run killed between its two renames) is redone whole.
                        overwrite=overwrite or skip_existing, stream=stream)
         clash = next((claimed[p] for p in (video_out, csv_out) if p is not None and p in claimed), None)
@@ -355,7 +368,7 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
             settled[label] = VideoOutcome(label, "skipped", "outputs exist")
             continue
         jobs.append(job)
-    return BatchPlan(jobs, order, settled)
+    return BatchPlan(jobs, order, settled, out_dir)
 
 
 # -- running -------------------------------------------------------------------------------------------
@@ -367,15 +380,16 @@ def run_job(job: VideoJob, report: Callable[[int], None] | None = None) -> Video
     """
     for out in (job.video_out, job.csv_out):
         if out is not None:
-            out.parent.mkdir(parents=True, exist_ok=True)
+            make_output_folder(out.parent)
     buffer = io.StringIO() if job.stream else None
     csv_options = {"data_format": job.data_format}
     if job.stream:
         csv_options.update(stream=buffer, video=job.label, header=False)
     progress = None if report is None else (lambda done, total: report(done))
     summary = run_video(job.video, job.roi, tracker=job.tracker, start_frame=job.start_frame,
-                        video_out=job.video_out, csv_out="-" if job.stream else job.csv_out,
-                        overwrite=job.overwrite, progress=progress, csv_options=csv_options)
+                        max_frames=job.max_frames, video_out=job.video_out,
+                        csv_out="-" if job.stream else job.csv_out, overwrite=job.overwrite, progress=progress,
+                        csv_options=csv_options)
     return VideoOutcome(job.label, "ok", frames=summary.frames, lost=summary.lost,
                         expected_frames=summary.expected_frames, seconds=summary.seconds,
                         truncated=summary.truncated,
@@ -413,6 +427,7 @@ def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str]
     """
     started = time.perf_counter()
     outcomes = dict(plan.settled)
+    existing = {p for job in plan.jobs for p in plan.output_folders(job) if p.exists()}
     if stream is not None and data_format == "csv":
         stream.write(header_line(video=True))
     next_out = 0
@@ -441,16 +456,21 @@ def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str]
     def worker_died(index: int, pid: int) -> None:
         remove_temporary_outputs(plan.jobs[index], pid)
 
-    for result in run_tasks(run_job, plan.jobs, jobs=jobs, scheduler=scheduler, on_progress=progress,
-                            on_worker_death=worker_died):
-        outcome = _settle(plan.jobs[result.index], result)
-        done_frames[result.index] = outcome.frames
-        outcomes[outcome.label] = outcome
-        if on_frames is not None:
-            on_frames(sum(done_frames))
-        if on_outcome is not None:
-            on_outcome(outcome)
-        flush_stream()
+    try:
+        for result in run_tasks(run_job, plan.jobs, jobs=jobs, scheduler=scheduler, on_progress=progress,
+                                on_worker_death=worker_died):
+            outcome = _settle(plan.jobs[result.index], result)
+            done_frames[result.index] = outcome.frames
+            outcomes[outcome.label] = outcome
+            if on_frames is not None:
+                on_frames(sum(done_frames))
+            if on_outcome is not None:
+                on_outcome(outcome)
+            flush_stream()
+    finally:
+        # Failed and interrupted videos leave no outputs, nor folders made only for them (the others' folders
+        # hold their outputs, so are not empty).
+        remove_empty_folders({p for job in plan.jobs for p in plan.output_folders(job)} - existing)
     return BatchSummary([replace(outcomes[label], rows=None) for label in plan.order],
                         time.perf_counter() - started)
 

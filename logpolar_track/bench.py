@@ -383,7 +383,7 @@ def matplotlib_missing() -> str | None:
     try:
         import matplotlib  # noqa: F401
     except ImportError:
-        return "--plot needs matplotlib, which is not installed; install it with: pip install 'lptrack[plot]'"
+        return "--plot needs matplotlib, which is not installed; install it with: pip install matplotlib"
     return None
 
 

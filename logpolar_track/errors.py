@@ -34,3 +34,9 @@ class UsageError(LptrackError, ValueError):
     """An argument has a value lptrack does not accept (unknown tracker, bad option value)."""
 
     exit_code = 2
+
+
+class FrameRangeError(VideoError, UsageError):
+    """A frame index or time given as an argument lies outside the video (bad usage for this video)."""
+
+    exit_code = 2

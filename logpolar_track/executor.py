@@ -35,7 +35,7 @@ PROGRESS_INTERVAL_S = 0.25
 TERMINATE_GRACE_S = 5.0
 
 #: Hint shown when ``scheduler`` is used without the optional Dask extra.
-DASK_HINT = "--scheduler needs Dask's distributed scheduler: pip install 'lptrack[dask]'"
+DASK_HINT = "--scheduler needs Dask's distributed scheduler: pip install 'dask[distributed]'"
 
 TaskFunction = Callable[[Any, "Callable[[int], None] | None"], Any]
 
@@ -155,7 +155,10 @@ def _worker_main(connection, function, item) -> None:
         now = time.monotonic()
         if now - last >= PROGRESS_INTERVAL_S:
             last = now
-            connection.send(("progress", done))
+            try:
+                connection.send(("progress", done))
+            except (BrokenPipeError, ConnectionResetError):
+                raise KeyboardInterrupt from None  # the parent is gone: stop, deleting temporary outputs
 
     try:
         message = ("done", function(item, report))
@@ -164,10 +167,18 @@ def _worker_main(connection, function, item) -> None:
     except Exception as exc:  # noqa: BLE001 - reported to the parent as this task's failure
         message = ("error", describe_exception(exc))
     try:
-        connection.send(message)
+        _send(connection, message)
     except Exception as exc:  # noqa: BLE001 - e.g. a result that cannot be pickled
-        connection.send(("error", f"cannot return the result: {describe_exception(exc)}"))
+        _send(connection, ("error", f"cannot return the result: {describe_exception(exc)}"))
     connection.close()
+
+
+def _send(connection, message) -> None:
+    """Send to the parent; if it has gone (it was stopped, its end is closed) there is no one to tell."""
+    try:
+        connection.send(message)
+    except (BrokenPipeError, ConnectionResetError, EOFError):
+        pass
 
 
 def _context():

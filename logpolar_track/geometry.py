@@ -144,7 +144,11 @@ def parse_roi(spec: str) -> Ellipse:
         If the text has the wrong number of fields, a field is not a finite number, or a radius is not > 0.
     """
     text = str(spec).strip()
-    fields = [f.strip() for f in text.replace(";", ",").split(",")] if text else []
+    fields = [f.strip() for f in text.split(",")] if text else []
+    if len(fields) == 1 and len(text.replace(";", " ").split()) > 1:
+        raise RoiError(f"ROI '{spec}': separate the numbers with commas; expected {ROI_SYNTAX}")
+    if "" in fields and len(fields) > 1:
+        raise RoiError(f"ROI '{spec}' has an empty field (a stray comma?); expected {ROI_SYNTAX}")
     if len(fields) not in (3, 5):
         raise RoiError(f"ROI '{spec}' has {len(fields)} number(s); expected {ROI_SYNTAX}")
     try:

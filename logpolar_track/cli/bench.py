@@ -40,7 +40,7 @@ Columns (per sequence and tracker; 'mean' rows average over sequences):
 \b
 Examples:
   lptrack bench
-  lptrack bench --dataset ../shared/data --trackers fixed,cv-mil --json res.json
+  lptrack bench --dataset ~/data/otb --trackers fixed,cv-mil --json res.json
   lptrack bench --trackers cv-csrt,cv-kcf --json - > res.json
 """
 
@@ -56,11 +56,11 @@ Examples:
                    "table goes to stderr).")
 @click.option("--per-frame", is_flag=True, help="Include per-frame IoU and centre error arrays in the JSON.")
 @click.option("--plot", "plot_out", metavar="PATH.png", type=click.Path(dir_okay=False, path_type=Path),
-              help="Save success and precision plots (needs matplotlib: pip install 'lptrack[plot]').")
-@click.option("--jobs", type=click.IntRange(min=1), default=1, show_default=True, metavar="N",
+              help="Save success and precision plots (needs matplotlib: pip install matplotlib).")
+@click.option("--jobs", "-j", type=click.IntRange(min=1), default=1, show_default=True, metavar="N",
               help="Run (sequence, tracker) pairs in N processes. Speeds are only comparable at equal N.")
 @click.option("--scheduler", metavar="ADDRESS",
-              help="Run the pairs on this Dask scheduler instead (pip install 'lptrack[dask]'; the sequences "
+              help="Run the pairs on this Dask scheduler instead (pip install 'dask[distributed]'; the sequences "
                    "at the same paths on its workers).")
 @click.option("--speed", is_flag=True,
               help="Time the trackers instead (thesis Table 4.1 on a 640x480 synthetic video, one core) with "
@@ -92,8 +92,9 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
     if not datasets:
         found = default_dataset()
         if found is None:
-            raise UsageError("no --dataset given and no sample_videos/ folder found beside the package or in "
-                             "the current folder; give --dataset DIR")
+            raise UsageError("no --dataset given, and no sample_videos/ folder in the current folder or in the "
+                             "source checkout lptrack runs from (a wheel install has none); give --dataset DIR "
+                             "(lptrack samples, OTB, VOT or UAV123 folders), or run it in the checkout")
         datasets = (found,)
     names, skipped = _runnable_trackers(trackers, quiet)
     sequences = collect_sequences(datasets)

@@ -130,7 +130,7 @@ def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path 
     The centre path over the run's first frame; scale, rotation (degrees
     CCW, cumulative) and score against time, lost frames shaded red. With
     --gt: ground truth overlaid and the errors per frame (centre px, scale %,
-    rotation deg). Needs matplotlib: pip install 'lptrack[plot]'.
+    rotation deg). Needs matplotlib: pip install matplotlib.
     Prints the PNG's path on stdout.
     """
     hint = matplotlib_hint()

@@ -8,7 +8,6 @@ processes or on a Dask cluster, one failing video never stops the others, and a 
 from __future__ import annotations
 
 import os
-import signal
 import sys
 import textwrap
 import time
@@ -20,10 +19,12 @@ from ..batch import (BatchSummary, VideoOutcome, find_videos, outputs_complete, 
                      run_batch)
 from ..errors import UsageError
 from ..executor import default_jobs
-from ..pipeline import CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, default_outputs, run_video
+from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, default_outputs, roi_sidecar_paths,
+                        run_video)
 from ..results import COLUMNS, FORMATS
 from ..trackers import tracker_class, tracker_names
-from . import EXIT_FAILURE, OneLineErrors, main, parse_roi_option
+from ..video import make_output_folder
+from . import EXIT_BROKEN_PIPE, EXIT_FAILURE, OneLineErrors, main, parse_roi_option
 
 
 class RunCommand(OneLineErrors):
@@ -117,17 +118,20 @@ Examples:
               help="Tracking method (see the list below).")
 @click.option("--start-frame", type=click.IntRange(min=0), default=0, show_default=True, metavar="N",
               help="Frame index (0 = first) the ROI refers to; tracking starts there.")
-@click.option("--out", "video_out", type=click.Path(dir_okay=False, path_type=Path), metavar="VIDEO_OUT",
+@click.option("--frames", "max_frames", type=click.IntRange(min=1), default=None, metavar="N",
+              help="Track N frames (the start frame included), then stop. Default: to the end of the video.")
+@click.option("--out", "-o", "video_out", type=click.Path(dir_okay=False, path_type=Path), metavar="VIDEO_OUT",
               help=f"Annotated video to write (one input only). Default: <video stem>{VIDEO_OUT_SUFFIX}. "
-                   f"Extension .mp4/.mov (mp4v), .avi (MJPG), .mkv or .webm; falls back to MJPG .avi.")
+                   f"Extension .mp4/.m4v/.mov (mp4v), .avi (MJPG), .mkv or .webm; falls back to MJPG .avi.")
 @click.option("--csv", "csv_out", metavar="CSV_OUT",
               help=f"Per-frame CSV to write (one input only), or '-' for stdout (then nothing else goes to "
                    f"stdout). Default: <video stem>{CSV_OUT_SUFFIX}.")
-@click.option("--out-dir", type=click.Path(file_okay=False, path_type=Path), metavar="DIR",
+@click.option("--out-dir", type=click.Path(path_type=Path), metavar="DIR",
               help="Folder for the outputs (created if needed), mirroring the inputs' folders. "
                    "Default: the current folder.")
-@click.option("--format", "data_format", type=click.Choice(tuple(FORMATS)), default="csv", show_default=True,
-              help="Per-frame data as CSV or JSON lines.")
+@click.option("--format", "data_format", type=click.Choice(tuple(FORMATS)), default=None,
+              help="Per-frame data as CSV or JSON lines. Default: from the --csv file's extension (.jsonl: JSON "
+                   "lines), else CSV.")
 @click.option("--no-video", is_flag=True, help="Do not write annotated videos (faster).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 @click.option("--skip-existing", is_flag=True,
@@ -137,11 +141,12 @@ Examples:
               help="Videos tracked in parallel processes. Default: the number of cores.")
 @click.option("--scheduler", metavar="ADDRESS",
               help="Run the videos on this Dask scheduler (e.g. tcp://10.0.0.5:8786) instead; needs "
-                   "pip install 'lptrack[dask]' and the files at the same paths on the workers.")
+                   "pip install 'dask[distributed]' and the files at the same paths on the workers.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary on stderr (failures still).")
 def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tracker: str, start_frame: int,
-        video_out: Path | None, csv_out: str | None, out_dir: Path | None, data_format: str, no_video: bool,
-        overwrite: bool, skip_existing: bool, jobs: int | None, scheduler: str | None, quiet: bool) -> None:
+        max_frames: int | None, video_out: Path | None, csv_out: str | None, out_dir: Path | None,
+        data_format: str, no_video: bool, overwrite: bool, skip_existing: bool, jobs: int | None,
+        scheduler: str | None, quiet: bool) -> None:
     """Track the object inside a circle or ellipse through VIDEO (or many).
 
     Writes an annotated copy of the video (the tracked outline, a radius line
@@ -151,6 +156,8 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     existing files are kept unless --overwrite is given.
     """
     roi = None if roi_spec is None else parse_roi_option(roi_spec)
+    if data_format is None:
+        data_format = "jsonl" if csv_out and Path(csv_out).suffix.lower() == FORMATS["jsonl"] else "csv"
     if no_video and video_out is not None:
         raise UsageError("--out and --no-video contradict each other; give one of them")
     if overwrite and skip_existing:
@@ -160,9 +167,9 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
                          "(see 'lptrack run --help')")
     single = len(videos) == 1 and videos[0] != "-" and not Path(videos[0]).is_dir() and roi_file is None
     if single:
-        _run_one(Path(videos[0]), roi, tracker=tracker, start_frame=start_frame, video_out=video_out,
-                 csv_out=csv_out, out_dir=out_dir, data_format=data_format, no_video=no_video,
-                 overwrite=overwrite, skip_existing=skip_existing, quiet=quiet)
+        _run_one(Path(videos[0]), roi, tracker=tracker, start_frame=start_frame, max_frames=max_frames,
+                 video_out=video_out, csv_out=csv_out, out_dir=out_dir, data_format=data_format,
+                 no_video=no_video, overwrite=overwrite, skip_existing=skip_existing, quiet=quiet)
         return
     if video_out is not None:
         raise UsageError("--out names one video's output; with several videos give --out-dir DIR")
@@ -177,8 +184,8 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     if videos and not inputs:  # without VIDEO arguments the ROI file's videos are the inputs
         raise UsageError(f"no videos found in {', '.join(repr(v) for v in videos)}")
     plan = plan_batch(inputs, roi=roi, roi_entries=entries, tracker=tracker, start_frame=start_frame,
-                      out_dir=out_dir or ".", video=not no_video, stream=stream, data_format=data_format,
-                      overwrite=overwrite, skip_existing=skip_existing)
+                      max_frames=max_frames, out_dir=out_dir or ".", video=not no_video, stream=stream,
+                      data_format=data_format, overwrite=overwrite, skip_existing=skip_existing)
     summary = _run_many(plan, jobs=jobs or default_jobs(), scheduler=scheduler, stream=stream,
                         data_format=data_format, quiet=quiet)
     if summary.failed:
@@ -189,15 +196,15 @@ def _stdout_closed() -> None:
     """`lptrack run ... --csv - | head`: the reader left; stop quietly, without Python's shutdown noise."""
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, sys.stdout.fileno())
-    sys.exit(EXIT_FAILURE)
+    sys.exit(EXIT_BROKEN_PIPE)
 
 
-def _run_one(video: Path, roi, *, tracker: str, start_frame: int, video_out: Path | None, csv_out: str | None,
-             out_dir: Path | None, data_format: str, no_video: bool, overwrite: bool, skip_existing: bool,
-             quiet: bool) -> None:
+def _run_one(video: Path, roi, *, tracker: str, start_frame: int, max_frames: int | None,
+             video_out: Path | None, csv_out: str | None, out_dir: Path | None, data_format: str, no_video: bool,
+             overwrite: bool, skip_existing: bool, quiet: bool) -> None:
     """One video in this process, errors raised as they are (exit 1 or 2)."""
     if out_dir is not None:
-        out_dir.mkdir(parents=True, exist_ok=True)
+        make_output_folder(out_dir)
     default_video, default_csv = default_outputs(video, out_dir or ".")
     if not no_video and video_out is None:
         video_out = default_video
@@ -209,7 +216,7 @@ def _run_one(video: Path, roi, *, tracker: str, start_frame: int, video_out: Pat
             click.echo(f"lptrack: {video.name}: outputs exist; skipped (--skip-existing)", err=True)
         return
     try:
-        summary = run_video(video, roi, tracker=tracker, start_frame=start_frame,
+        summary = run_video(video, roi, tracker=tracker, start_frame=start_frame, max_frames=max_frames,
                             video_out=None if no_video else video_out, csv_out=csv_out,
                             overwrite=overwrite or skip_existing,
                             progress=show and sys.stderr.isatty(), csv_options={"data_format": data_format})
@@ -217,6 +224,9 @@ def _run_one(video: Path, roi, *, tracker: str, start_frame: int, video_out: Pat
         _stdout_closed()
     if not show:
         return
+    if roi is None and start_frame > 0 and any(p.is_file() for p in roi_sidecar_paths(video)):
+        click.echo(f"lptrack: note: the ROI came from {video.name}'s .roi file and was applied to start frame "
+                   f"{start_frame}", err=True)
     if summary.video_fps_guessed:
         click.echo(f"lptrack: warning: '{video}' reports no frame rate; assumed {summary.video_fps:g} fps "
                    f"for time_s and the output video", err=True)
@@ -270,23 +280,16 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
         if bar is not None:
             show()
 
-    previous = signal.signal(signal.SIGTERM, _terminated)
     try:
         summary = run_batch(plan, jobs=jobs, scheduler=scheduler, stream=sys.stdout if stream else None,
                             data_format=data_format, on_outcome=on_outcome, on_frames=on_frames)
     except BrokenPipeError:
         _stdout_closed()
     finally:
-        signal.signal(signal.SIGTERM, previous)
         if bar is not None:
             bar.close()
     _report(summary, quiet=quiet)
     return summary
-
-
-def _terminated(signum, frame):
-    # SIGTERM stops a batch like Ctrl-C: workers are stopped and nothing half-written is left.
-    raise KeyboardInterrupt
 
 
 def _report(summary: BatchSummary, *, quiet: bool) -> None:
@@ -298,8 +301,9 @@ def _report(summary: BatchSummary, *, quiet: bool) -> None:
             parts.append(f"{summary.count('skipped')} skipped (outputs exist)")
         parts.append(f"{summary.count('failed')} failed")
         ran = summary.count("ok") + summary.count("failed")
-        click.echo(f"lptrack: {len(summary.outcomes)} videos: {', '.join(parts)}; {summary.frames} frames in "
-                   f"{summary.seconds:.1f} s ({summary.frames / seconds:.1f} frames/s, "
+        count = len(summary.outcomes)
+        click.echo(f"lptrack: {count} video{'' if count == 1 else 's'}: {', '.join(parts)}; {summary.frames} "
+                   f"frames in {summary.seconds:.1f} s ({summary.frames / seconds:.1f} frames/s, "
                    f"{ran / seconds:.2f} videos/s)", err=True)
         for outcome in summary.outcomes:
             if outcome.truncated:

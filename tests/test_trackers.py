@@ -5,12 +5,14 @@ cumulative (unwrapped).
 """
 
 import math
+import re
 from functools import lru_cache
 
 import cv2
 import numpy as np
 import pytest
 
+from logpolar_track.errors import RoiError, UsageError
 from logpolar_track.geometry import Ellipse
 from logpolar_track.synthetic import Pose, random_texture, render_frame, similarity_path, synthetic_sequence
 from logpolar_track.trackers import create_tracker, tracker_class, tracker_names
@@ -185,3 +187,18 @@ def test_frames_are_not_modified(name):
 def test_update_before_init_raises():
     with pytest.raises(RuntimeError, match="init"):
         create_tracker("fixed").update(np.zeros((10, 10, 3), np.uint8))
+
+
+@pytest.mark.parametrize("name", [n for n in tracker_names() if n in ("fixed", "lpcf")])
+@pytest.mark.parametrize("frame, roi, error, fragment", [
+    (np.zeros((120, 160, 3), np.uint8), Ellipse(200, 60, 20, 20, 0), RoiError, "outside"),
+    (np.zeros((120, 160, 3), np.uint8), Ellipse(80, 60, 0.5, 0.5, 0), RoiError, "small"),
+    (np.zeros((120, 160, 3), np.uint8), Ellipse(80, 60, float("nan"), 20, 0), RoiError, "finite"),
+    (np.zeros(160, np.uint8), Ellipse(80, 60, 20, 20, 0), UsageError, "(H, W)"),
+    (np.zeros((120, 160, 2), np.uint8), Ellipse(80, 60, 20, 20, 0), UsageError, "(H, W)"),
+])
+def test_init_refuses_what_it_cannot_track(name, frame, roi, error, fragment):
+    """Called from Python, a tracker says what is wrong with its start (as ``lptrack run`` does), instead of
+    dividing by zero or reporting every frame lost."""
+    with pytest.raises(error, match=re.escape(fragment)):
+        create_tracker(name).init(frame, roi)

@@ -14,8 +14,8 @@ from typing import Callable, ClassVar
 
 import numpy as np
 
-from ..errors import UsageError
-from ..geometry import Ellipse
+from ..errors import RoiError, UsageError
+from ..geometry import Ellipse, check_roi_fits
 from ..logpolar import to_gray
 
 
@@ -95,6 +95,7 @@ class SimilarityTracker(Tracker):
         self.last: Similarity | None = None
 
     def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
+        check_start(frame, roi)
         self.roi = roi
         self.last = Similarity(roi.cx, roi.cy, 1.0, 0.0, 1.0)
         self._start(self._prepared(frame), roi)
@@ -121,7 +122,8 @@ class SimilarityTracker(Tracker):
 
     @abstractmethod
     def _start(self, gray: np.ndarray, roi: Ellipse) -> None:
-        """Build the appearance model from the first frame (float32 grey)."""
+        """Build the appearance model from the first frame (float32 grey, or as decoded when the class's
+        ``gray_dtype`` is None)."""
 
     @abstractmethod
     def _estimate(self, gray: np.ndarray, last: Similarity) -> Similarity | None:
@@ -129,6 +131,26 @@ class SimilarityTracker(Tracker):
 
     def _accept(self, estimate: Similarity) -> None:
         """Hook called with every estimate accepted as tracked (e.g. to update a template)."""
+
+
+def check_start(frame: np.ndarray, roi: Ellipse) -> None:
+    """Raise unless ``frame`` is an image (``(H, W)`` grey or ``(H, W, 3|4)`` colour, not empty) and ``roi``
+    fits it (:func:`~logpolar_track.geometry.check_roi_fits`): what every tracker's ``init`` needs.
+
+    Raises
+    ------
+    UsageError
+        The frame is not an image.
+    RoiError
+        The ROI is malformed (non-finite, semi-axes too small) or does not fit the frame.
+    """
+    frame = np.asarray(frame)
+    if frame.ndim not in (2, 3) or (frame.ndim == 3 and frame.shape[2] not in (1, 3, 4)) or frame.size == 0:
+        raise UsageError(f"a frame must be an (H, W) grey or (H, W, 3) colour image, got shape {frame.shape}")
+    values = (roi.cx, roi.cy, roi.a, roi.b, roi.angle_deg)
+    if not all(math.isfinite(v) for v in values):
+        raise RoiError(f"the ROI must be finite numbers, got {roi}")
+    check_roi_fits(roi, frame.shape[1], frame.shape[0])
 
 
 def _finite(sim: Similarity) -> bool:

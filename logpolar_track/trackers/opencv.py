@@ -27,7 +27,7 @@ import math
 import numpy as np
 
 from ..geometry import Ellipse, ellipse_in_box
-from .base import Tracker, TrackState, register
+from .base import Tracker, TrackState, check_start, register
 
 _CONTRIB_HINT = ("needs opencv-contrib-python-headless instead of opencv-python-headless "
                  "(swap them: pip uninstall opencv-python-headless && pip install opencv-contrib-python-headless)")
@@ -65,6 +65,7 @@ class _OpenCVTracker(Tracker):
         return getattr(cv2, self._cv_class).create()
 
     def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
+        check_start(frame, roi)
         x, y, w, h = roi.bounding_box()
         # OpenCV takes an integer box; round the corners so the box stays centred on the ROI.
         x0, y0 = int(round(x)), int(round(y))

@@ -178,10 +178,10 @@ class _WindowSearch(SimilarityTracker):
 
 @register
 class FixedTemplateTracker(_WindowSearch):
-    """Fixed template, exhaustive centre search (thesis)."""
+    """Fixed template, centre search over a window (the thesis' exhaustive search; coarse-to-fine by default)."""
 
     name = "fixed"
-    summary = "fixed first-frame template; log-polar phase correlation at every centre of a window"
+    summary = "fixed first-frame template; log-polar phase correlation over a window of centres"
 
     def _start(self, gray: np.ndarray, roi: Ellipse) -> None:
         self.matcher, self.coarse_matcher = self._matchers(roi.a, roi.b)

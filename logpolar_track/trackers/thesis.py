@@ -273,13 +273,24 @@ class DifferenceDecompositionTracker(_WindowSearch):
 
 @register
 class TemplateUpdateTracker(FixedTemplateTracker):
-    """Template update under a threshold (thesis)."""
+    """Template update under a threshold (thesis).
+
+    Parameters
+    ----------
+    update_threshold : float
+        Match height (0 to 1) of the first template at the accepted estimate above which the current template
+        is renewed from that frame; below it the first template no longer vouches for the estimate.
+    **kwargs
+        ``window``, ``n_rho``, ``n_theta``, ``lost_threshold``, ``coarse``: as for ``fixed``.
+    """
 
     name = "update"
     summary = "fixed search against the first and the current template; current one renewed when trustworthy"
 
     def __init__(self, *, update_threshold: float = 0.35, **kwargs):
         super().__init__(**kwargs)
+        if not 0 <= update_threshold <= 1:
+            raise ValueError(f"update_threshold must be from 0 to 1, got {update_threshold}")
         self.update_threshold = float(update_threshold)
 
     def _start(self, gray: np.ndarray, roi: Ellipse) -> None:
@@ -313,7 +324,17 @@ class TemplateUpdateTracker(FixedTemplateTracker):
 
 @register
 class TwoTemplateTracker(_WindowSearch):
-    """Two concentric templates, the inner one weighted more, for occlusion from the border (thesis)."""
+    """Two concentric templates, the inner one weighted more, for occlusion from the border (thesis).
+
+    Parameters
+    ----------
+    inner_ratio : float
+        Size of the inner template's ellipse as a fraction (0 to 1, exclusive) of the ROI's.
+    inner_weight : float
+        Weight (0 to 1) of the inner template's match in the combined score; the outer one gets the rest.
+    **kwargs
+        ``window``, ``n_rho``, ``n_theta``, ``lost_threshold``, ``coarse``: as for ``fixed``.
+    """
 
     name = "occlusion"
     summary = "inner and outer concentric templates, inner weighted more; tolerates occlusion from the border"

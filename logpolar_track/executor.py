@@ -140,7 +140,14 @@ def _run_here(function, items, on_progress) -> Iterator[TaskOutcome]:
 # -- local worker processes ----------------------------------------------------------------------------
 
 def _interrupt(signum, frame):
+    # Once: a second signal would interrupt the task's clean-up of its temporary outputs.
+    signal.signal(signal.SIGTERM, _ignore)
+    signal.signal(signal.SIGINT, _ignore)
     raise KeyboardInterrupt
+
+
+def _ignore(signum, frame):
+    pass  # not SIG_IGN: a signal already pending would then raise "ignored due to race condition"
 
 
 def _worker_main(connection, function, item) -> None:

@@ -168,14 +168,14 @@ def parse_roi(spec: str) -> Ellipse:
     return Ellipse(cx, cy, a, b, angle)
 
 
-def check_roi_fits(roi: Ellipse, width: int, height: int, *, source: str = "the frame",
+def check_roi_fits(roi: Ellipse, width: int, height: int, *, source: str | None = None,
                    min_inside: float = 0.5, min_radius: float = 2.0) -> None:
     """Raise :class:`RoiError` unless ``roi`` is usable on a ``width`` x ``height`` frame.
 
     A ROI may hang over the border (trackers pad the frame), but its centre must lie in the frame, at least
     ``min_inside`` of its area must be inside, and its smaller semi-axis must be at least ``min_radius`` pixels.
     """
-    where = f"the {width}x{height} frame of {source}"
+    where = f"the {width}x{height} frame" + ("" if source is None else f" of {source}")
     if not (0 <= roi.cx < width and 0 <= roi.cy < height):
         raise RoiError(f"ROI centre ({_fmt(roi.cx)}, {_fmt(roi.cy)}) lies outside {where}; "
                        f"give a centre with 0 <= cx < {width} and 0 <= cy < {height}")

@@ -21,7 +21,7 @@ from .geometry import ROI_SYNTAX, Ellipse, check_roi_fits, parse_roi
 from . import trackers as _trackers
 from .results import CsvWriter, FrameResult
 from .trackers import Tracker, create_tracker
-from .video import CODECS_BY_EXTENSION, VideoReader, VideoWriter, check_output_path
+from .video import CODECS_BY_EXTENSION, VideoReader, VideoWriter, check_output_path, writes_in_place
 
 #: Tracker used when none is named: the registry's choice (``trackers.DEFAULT_TRACKER``) when it makes one,
 #: else ``fixed``. Read from one place so the CLI, the docs and the library agree.
@@ -243,6 +243,8 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
     """Raise before any work if an output cannot be written (see :func:`run_video`)."""
     planned = []
     if video_out is not None:
+        if writes_in_place(video_out):  # the video is renamed into place: it cannot go to a device or pipe
+            check_output_path(video_out, what="output video")
         if Path(video_out).suffix.lower() not in CODECS_BY_EXTENSION:
             raise UsageError(f"cannot write video '{video_out}': unsupported extension "
                              f"'{Path(video_out).suffix}'; use one of {', '.join(CODECS_BY_EXTENSION)}")
@@ -306,7 +308,7 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
         if max_frames is not None and announced:
             announced = min(announced, max_frames)
         total = announced or max_frames
-        csv_writer = video_writer = None
+        csv_writer = video_writer = written = None
         finish = _no_op
         frames = lost = 0
         try:
@@ -331,11 +333,16 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
             if csv_writer is not None:
                 csv_writer.close()
         except BaseException:
-            # Ctrl-C and failures alike: delete temporary outputs, keep nothing half-written.
-            if video_writer is not None:
-                video_writer.abort()
-            if csv_writer is not None:
-                csv_writer.abort()
+            # Ctrl-C and failures alike: delete temporary outputs, keep nothing half-written -- nor a finished
+            # video whose CSV then failed (a run either leaves all its outputs or none).
+            try:
+                if video_writer is not None:
+                    video_writer.abort()
+                    if written is not None:
+                        written.unlink(missing_ok=True)
+            finally:
+                if csv_writer is not None:
+                    csv_writer.abort()
             raise
         finally:
             finish()

@@ -40,7 +40,7 @@ from typing import IO
 from .errors import OutputError
 from .geometry import wrap_degrees
 from .trackers.base import TrackState
-from .video import check_output_path, is_special_file, temporary_path
+from .video import check_output_path, writes_in_place, temporary_path
 
 #: The run CSV's columns, in order. A contract: never reorder or rename; only append.
 COLUMNS: tuple[str, ...] = ("frame", "time_s", "cx", "cy", "a", "b", "angle_deg", "scale", "rotation_deg",
@@ -200,10 +200,12 @@ class CsvWriter:
         self._closed = False
         if self.to_stdout:
             self._file = stream if stream is not None else sys.stdout
+            if self._file is None:  # started with stdout closed (`>&-`)
+                raise OutputError("cannot write the rows to stdout: it is closed")
         else:
             self.path = check_output_path(target, overwrite=overwrite, what="output CSV", special_ok=True)
             # A device or pipe (/dev/null, a named pipe, a process substitution) is written directly.
-            self._temp = None if is_special_file(self.path) else temporary_path(self.path)
+            self._temp = None if writes_in_place(self.path) else temporary_path(self.path)
             try:
                 self._file = open(self._temp or self.path, "w", encoding="utf-8", newline="")
             except OSError as exc:
@@ -227,7 +229,12 @@ class CsvWriter:
 
     def _emit(self, text: str) -> None:
         if self.to_stdout:
-            self._file.write(text)  # a closed pipe (BrokenPipeError) is the caller's to handle
+            try:
+                self._file.write(text)
+            except BrokenPipeError:
+                raise  # the reader left (`| head`): the caller's to handle, quietly
+            except OSError as exc:
+                raise OutputError(f"cannot write the rows to stdout: {exc.strerror or exc}") from None
             return
         try:
             self._file.write(text)
@@ -254,7 +261,12 @@ class CsvWriter:
             return
         self._closed = True
         if self.to_stdout:
-            self._file.flush()
+            try:
+                self._file.flush()
+            except BrokenPipeError:
+                raise
+            except OSError as exc:
+                raise OutputError(f"cannot write the rows to stdout: {exc.strerror or exc}") from None
             return
         try:
             self._file.close()

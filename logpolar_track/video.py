@@ -296,20 +296,20 @@ def temporary_path(path: Path, *, pid: int | None = None) -> Path:
 def check_output_path(path, *, overwrite: bool = False, what: str = "output", special_ok: bool = False) -> Path:
     """Check that ``path`` can be written; return it as a :class:`Path`.
 
-    ``special_ok`` accepts an existing file that is not a regular file -- ``/dev/null``, a named pipe, a
+    ``special_ok`` accepts what :func:`writes_in_place` -- ``/dev/null``, ``/dev/stdout``, a named pipe, a
     process substitution's ``/dev/fd/N`` -- which is then written directly, never replaced.
 
     Raises
     ------
     OutputError
         If its folder does not exist, is not a folder or is not writable, if ``path`` is a folder, if ``path``
-        exists and ``overwrite`` is False, or if it is a special file and ``special_ok`` is False.
+        exists and ``overwrite`` is False, or if it is written in place and ``special_ok`` is False.
     """
     path = Path(path)
-    if is_special_file(path):
+    if writes_in_place(path):
         if special_ok:
             return path
-        raise OutputError(f"cannot write {what} '{path}': it is not a regular file; give a file name")
+        raise OutputError(f"cannot write {what} '{path}': it is a device or stream, not a file; give a file name")
     folder = path.parent
     if not folder.exists():
         raise OutputError(f"cannot write {what} '{path}': folder '{folder}' does not exist")
@@ -324,9 +324,13 @@ def check_output_path(path, *, overwrite: bool = False, what: str = "output", sp
     return path
 
 
-def is_special_file(path) -> bool:
-    """Whether ``path`` exists and is neither a regular file nor a folder (a device, a pipe, a socket)."""
+def writes_in_place(path) -> bool:
+    """Whether output to ``path`` goes straight into it, never through a temporary file renamed over it: a
+    device, pipe or socket, or any path under ``/dev`` or ``/proc`` (``/dev/stdout`` and ``/proc/self/fd/1``
+    are streams even when they lead to a regular file, and renaming over them would replace the link)."""
     path = Path(path)
+    if str(path.absolute()).startswith(("/dev/", "/proc/")):
+        return True
     return path.exists() and not path.is_file() and not path.is_dir()
 
 

@@ -381,3 +381,50 @@ def test_cli_keeps_opencv_warnings_off_stderr():
     import cv2
 
     assert int(proc.stdout) == cv2.utils.logging.LOG_LEVEL_ERROR, proc.stderr
+
+
+def test_a_run_whose_csv_fails_at_the_end_leaves_no_video(tiny_video, workdir, monkeypatch):
+    from logpolar_track.errors import OutputError
+    from logpolar_track.results import CsvWriter
+
+    def fail(self):
+        raise OutputError("cannot write output CSV: No space left on device")
+
+    monkeypatch.setattr(CsvWriter, "close", fail)
+    result = invoke(tiny_video.path)
+    assert result.exit_code == 1 and "No space left" in result.stderr
+    assert listing(workdir) == []  # the finished video was removed with it: all outputs or none
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_stdout_that_cannot_be_written_is_one_line(tiny_video, workdir):
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "logpolar_track", "run", str(tiny_video.path), "--no-video",
+                               "--csv", "-"], stdout=full, stderr=subprocess.PIPE, text=True, timeout=120)
+    assert proc.returncode == 1
+    assert proc.stderr.strip() == "lptrack: error: cannot write the rows to stdout: No space left on device"
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/stdout"), reason="needs /dev/stdout")
+def test_csv_to_dev_stdout_redirected_to_a_file_is_written_not_replaced(tiny_video, workdir):
+    # /dev/stdout links to the open file: renaming a finished temporary file over it would replace the link.
+    with open(workdir / "rows.csv", "w") as rows:
+        proc = subprocess.run([sys.executable, "-m", "logpolar_track", "run", str(tiny_video.path), "--no-video",
+                               "--csv", "/dev/stdout"], stdout=rows, stderr=subprocess.PIPE, text=True,
+                              timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert len(read_rows((workdir / "rows.csv").read_text())) == tiny_video.n_frames
+    assert os.path.islink("/dev/stdout")
+
+
+def test_out_dir_that_cannot_be_made_is_one_line_for_a_batch_too(tiny_video, workdir):
+    (workdir / "afile").write_text("")
+    result = invoke(tiny_video.path.parent, "--out-dir", "afile/sub")
+    assert result.exit_code == 1
+    assert result.stderr.strip() == "lptrack: error: cannot create output folder 'afile/sub': 'afile' is a file, " \
+                                    "not a folder"
+
+
+def test_scheduler_with_one_video_runs_it_as_a_batch(tiny_video, workdir):
+    result = invoke(tiny_video.path, "--scheduler", "tcp://127.0.0.1:1", "--out", "x.mp4")
+    assert result.exit_code == 2 and "with --scheduler give --out-dir DIR" in result.stderr

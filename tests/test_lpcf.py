@@ -237,7 +237,8 @@ def _leaves_and_returns(seed):
 @pytest.mark.parametrize("seed", [1, 3, 5])
 def test_finds_the_object_again_after_it_left_the_view(seed):
     """Out of view, the object is reported lost; when it comes back elsewhere, the whole-frame search finds it
-    (measured on seeds 0-5: all six back within 0.2 px; two of six before the search covered the whole frame).
+    (measured on seeds 0-5: all six back within 0.2 px; two of six before the search covered the whole frame;
+    over 24 more varied generated cases 14 are found again, 7 before).
     Seeds 1, 3 and 5 each failed without one part: the search settled on background that matched less than a
     tracked frame does (1), the estimate sat at the frame's edge with a weak match and never counted as a drop
     (3), and the search's patches took the angle the estimate had drifted to while the object was away (5)."""
@@ -346,7 +347,7 @@ def test_shrinking_patches_sample_like_a_full_size_blur(scale, angle_deg):
 
 
 @pytest.mark.parametrize("params, fragment", [
-    ({"padding": -1}, "padding must be at least 0, got -1"),
+    ({"padding": -1}, "padding must be at least 0 and at most 10, got -1"),
     ({"learning_rate": 2}, "learning_rate must be above 0 and at most 1, got 2"),
     ({"scale_sigma": 0}, "scale_sigma must be above 0, got 0"),
     ({"iterations": 0}, "iterations must be at least 1, got 0"),

@@ -45,7 +45,19 @@ class Terminated(KeyboardInterrupt):
         self.signum = signum
 
 
-def _raise_terminated(signum, frame):
+def _ignore(signum, frame):
+    pass
+
+
+def _stop(signum, frame):
+    # Further signals are ignored from here on: a second one (two Ctrl-Cs, `kill` then `timeout`) would
+    # interrupt the clean-up this one starts and leave temporary files behind.
+    # (A handler that does nothing, not SIG_IGN: a signal already pending would then raise "ignored due to
+    # race condition".)
+    for other in (signal.SIGINT, *STOP_SIGNALS):
+        signal.signal(other, _ignore)
+    if signum == signal.SIGINT:
+        raise KeyboardInterrupt
     raise Terminated(signum)
 
 
@@ -60,7 +72,8 @@ class LptrackGroup(click.Group):
     def invoke(self, ctx: click.Context):
         # Handlers can only be set from the main thread (a test runner may invoke from another).
         main_thread = threading.current_thread() is threading.main_thread()
-        previous = {signum: signal.signal(signum, _raise_terminated) for signum in STOP_SIGNALS if main_thread}
+        previous = {signum: signal.signal(signum, _stop) for signum in (signal.SIGINT, *STOP_SIGNALS)
+                    if main_thread and signal.getsignal(signum) is not signal.SIG_IGN}
         try:
             return super().invoke(ctx)
         except LptrackError as exc:

@@ -17,13 +17,13 @@ import click
 
 from ..batch import (BatchSummary, VideoOutcome, find_videos, outputs_complete, plan_batch, read_roi_file,
                      run_batch)
-from ..errors import UsageError
+from ..errors import OutputError, UsageError
 from ..executor import default_jobs
 from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, default_outputs, roi_sidecar_paths,
                         run_video)
 from ..results import COLUMNS, FORMATS
 from ..trackers import tracker_class, tracker_names
-from ..video import make_output_folder
+from ..video import make_output_folder, remove_empty_folders
 from . import EXIT_BROKEN_PIPE, EXIT_FAILURE, OneLineErrors, main, parse_roi_option
 
 
@@ -165,18 +165,23 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     if not videos and roi_file is None:
         raise UsageError("give a VIDEO (a file, a folder, or '-' for paths on stdin), or --roi-file "
                          "(see 'lptrack run --help')")
-    single = len(videos) == 1 and videos[0] != "-" and not Path(videos[0]).is_dir() and roi_file is None
+    # With --scheduler even one video goes to the cluster, as a batch of one.
+    single = (len(videos) == 1 and videos[0] != "-" and not Path(videos[0]).is_dir() and roi_file is None
+              and scheduler is None)
     if single:
         _run_one(Path(videos[0]), roi, tracker=tracker, start_frame=start_frame, max_frames=max_frames,
                  video_out=video_out, csv_out=csv_out, out_dir=out_dir, data_format=data_format,
                  no_video=no_video, overwrite=overwrite, skip_existing=skip_existing, quiet=quiet)
         return
+    many = "with --scheduler" if scheduler is not None and len(videos) == 1 else "with several videos"
     if video_out is not None:
-        raise UsageError("--out names one video's output; with several videos give --out-dir DIR")
+        raise UsageError(f"--out names one video's output in this process; {many} give --out-dir DIR")
     if csv_out not in (None, "-"):
-        raise UsageError("--csv names one video's output; with several videos give --out-dir DIR, "
-                         "or --csv - for one stream with a 'video' column")
+        raise UsageError(f"--csv names one video's output in this process; {many} give --out-dir DIR, "
+                         f"or --csv - for one stream with a 'video' column")
     stream = csv_out == "-"
+    if stream and sys.stdout is None:
+        raise OutputError("cannot write the rows to stdout: it is closed")
     if stream and skip_existing:
         raise UsageError("--skip-existing needs outputs in files; it cannot apply to --csv -")
     entries = read_roi_file(roi_file) if roi_file is not None else []
@@ -186,8 +191,13 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     plan = plan_batch(inputs, roi=roi, roi_entries=entries, tracker=tracker, start_frame=start_frame,
                       max_frames=max_frames, out_dir=out_dir or ".", video=not no_video, stream=stream,
                       data_format=data_format, overwrite=overwrite, skip_existing=skip_existing)
-    summary = _run_many(plan, jobs=jobs or default_jobs(), scheduler=scheduler, stream=stream,
-                        data_format=data_format, quiet=quiet)
+    # The folder is made (or refused, in one line) once, up front; if the batch leaves nothing in it, it goes.
+    created = make_output_folder(out_dir) if out_dir is not None else []
+    try:
+        summary = _run_many(plan, jobs=jobs or default_jobs(), scheduler=scheduler, stream=stream,
+                            data_format=data_format, quiet=quiet)
+    finally:
+        remove_empty_folders(created)
     if summary.failed:
         sys.exit(EXIT_FAILURE)
 
@@ -203,8 +213,18 @@ def _run_one(video: Path, roi, *, tracker: str, start_frame: int, max_frames: in
              video_out: Path | None, csv_out: str | None, out_dir: Path | None, data_format: str, no_video: bool,
              overwrite: bool, skip_existing: bool, quiet: bool) -> None:
     """One video in this process, errors raised as they are (exit 1 or 2)."""
-    if out_dir is not None:
-        make_output_folder(out_dir)
+    created = make_output_folder(out_dir) if out_dir is not None else []
+    try:
+        _run_one_into(video, roi, tracker=tracker, start_frame=start_frame, max_frames=max_frames,
+                      video_out=video_out, csv_out=csv_out, out_dir=out_dir, data_format=data_format,
+                      no_video=no_video, overwrite=overwrite, skip_existing=skip_existing, quiet=quiet)
+    finally:
+        remove_empty_folders(created)  # a run that failed or was stopped leaves no folder made for it
+
+
+def _run_one_into(video: Path, roi, *, tracker: str, start_frame: int, max_frames: int | None,
+                  video_out: Path | None, csv_out: str | None, out_dir: Path | None, data_format: str,
+                  no_video: bool, overwrite: bool, skip_existing: bool, quiet: bool) -> None:
     default_video, default_csv = default_outputs(video, out_dir or ".")
     if not no_video and video_out is None:
         video_out = default_video
@@ -242,8 +262,9 @@ def _run_one(video: Path, roi, *, tracker: str, start_frame: int, max_frames: in
     if summary.csv_out is not None:
         what = data_format.upper()
         outputs.append(f"{what} to stdout" if summary.csv_out == "-" else f"{what} {summary.csv_out}")
-    click.echo(f"lptrack: {video.name}: {summary.frames} frames ({summary.lost} lost) with {summary.tracker} "
-               f"at {summary.processing_fps:.1f} frames/s; {'; '.join(outputs)}", err=True)
+    click.echo(f"lptrack: {video.name}: {summary.frames} frame{'' if summary.frames == 1 else 's'} "
+               f"({summary.lost} lost) with {summary.tracker} at {summary.processing_fps:.1f} frames/s; "
+               f"{'; '.join(outputs)}", err=True)
 
 
 def _truncation(label: str, frames: int, expected: int) -> str:
@@ -285,6 +306,8 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
                             data_format=data_format, on_outcome=on_outcome, on_frames=on_frames)
     except BrokenPipeError:
         _stdout_closed()
+    except OSError as exc:  # the stream of rows could not be written (e.g. a full disk behind stdout)
+        raise OutputError(f"cannot write the rows to stdout: {exc.strerror or exc}") from None
     finally:
         if bar is not None:
             bar.close()

@@ -146,7 +146,8 @@ def check_start(frame: np.ndarray, roi: Ellipse) -> None:
     """
     frame = np.asarray(frame)
     if frame.ndim not in (2, 3) or (frame.ndim == 3 and frame.shape[2] not in (1, 3, 4)) or frame.size == 0:
-        raise UsageError(f"a frame must be an (H, W) grey or (H, W, 3) colour image, got shape {frame.shape}")
+        raise UsageError(f"a frame must be an (H, W) grey or (H, W, 3) colour image (or 1 or 4 channels), got "
+                         f"shape {frame.shape}")
     values = (roi.cx, roi.cy, roi.a, roi.b, roi.angle_deg)
     if not all(math.isfinite(v) for v in values):
         raise RoiError(f"the ROI must be finite numbers, got {roi}")

@@ -27,6 +27,7 @@ empty fields as ``null``.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -152,6 +153,18 @@ def json_line(fields: list[str], *, video: str | None = None) -> str:
     return json.dumps(record, separators=(",", ":")) + "\n"
 
 
+@contextlib.contextmanager
+def stdout_errors():
+    """Turn a failed write of rows to stdout (a full disk behind it) into an :class:`OutputError`; a closed
+    pipe (``| head``: BrokenPipeError) passes through for the caller to end quietly."""
+    try:
+        yield
+    except BrokenPipeError:
+        raise
+    except OSError as exc:
+        raise OutputError(f"cannot write the rows to stdout: {exc.strerror or exc}") from None
+
+
 class CsvWriter:
     """Writes run results as CSV to a file (atomically) or to stdout.
 
@@ -229,12 +242,8 @@ class CsvWriter:
 
     def _emit(self, text: str) -> None:
         if self.to_stdout:
-            try:
+            with stdout_errors():
                 self._file.write(text)
-            except BrokenPipeError:
-                raise  # the reader left (`| head`): the caller's to handle, quietly
-            except OSError as exc:
-                raise OutputError(f"cannot write the rows to stdout: {exc.strerror or exc}") from None
             return
         try:
             self._file.write(text)
@@ -261,12 +270,8 @@ class CsvWriter:
             return
         self._closed = True
         if self.to_stdout:
-            try:
+            with stdout_errors():
                 self._file.flush()
-            except BrokenPipeError:
-                raise
-            except OSError as exc:
-                raise OutputError(f"cannot write the rows to stdout: {exc.strerror or exc}") from None
             return
         try:
             self._file.close()

@@ -7,6 +7,7 @@ processes or on a Dask cluster, one failing video never stops the others, and a 
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 import textwrap
@@ -21,7 +22,7 @@ from ..errors import OutputError, UsageError
 from ..executor import default_jobs
 from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, default_outputs, roi_sidecar_paths,
                         run_video)
-from ..results import COLUMNS, FORMATS
+from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..video import make_output_folder, remove_empty_folders
 from . import EXIT_BROKEN_PIPE, EXIT_FAILURE, OneLineErrors, main, parse_roi_option
@@ -302,12 +303,11 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
             show()
 
     try:
-        summary = run_batch(plan, jobs=jobs, scheduler=scheduler, stream=sys.stdout if stream else None,
-                            data_format=data_format, on_outcome=on_outcome, on_frames=on_frames)
+        with stdout_errors() if stream else contextlib.nullcontext():
+            summary = run_batch(plan, jobs=jobs, scheduler=scheduler, stream=sys.stdout if stream else None,
+                                data_format=data_format, on_outcome=on_outcome, on_frames=on_frames)
     except BrokenPipeError:
         _stdout_closed()
-    except OSError as exc:  # the stream of rows could not be written (e.g. a full disk behind stdout)
-        raise OutputError(f"cannot write the rows to stdout: {exc.strerror or exc}") from None
     finally:
         if bar is not None:
             bar.close()

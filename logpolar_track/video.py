@@ -440,11 +440,12 @@ class VideoWriter:
             if target != self.wanted_path and target.exists() and not self.overwrite:
                 tried.append(f"{code}{extension} ({target.name} exists)")
                 continue
-            temp = temporary_path(target)
+            # Known before the file exists, so that abort() deletes it even if a stop signal comes meanwhile.
+            temp = self._temp = temporary_path(target)
             with _fd2_silenced():
                 writer = cv2.VideoWriter(str(temp), _fourcc_text(code), self.fps, (width, height), True)
             if writer.isOpened():
-                self._writer, self._temp, self.path, self.fourcc = writer, temp, target, code
+                self._writer, self.path, self.fourcc = writer, target, code
                 self.size = (width, height)
                 self._encoder = _Encoder(writer, f"lptrack-write-{target.name}")
                 return

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import os
 import sys
 import time
@@ -33,7 +34,8 @@ from .geometry import ROI_SYNTAX, Ellipse, parse_roi
 from .pipeline import CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, run_video
 from .results import FORMATS, header_line
 from .trackers import tracker_class
-from .video import CODECS_BY_EXTENSION, make_output_folder, remove_empty_folders, temporary_path
+from .video import (CODECS_BY_EXTENSION, announced_frame_count, make_output_folder, remove_empty_folders,
+                    temporary_path)
 
 #: File extensions searched for in input folders (case-insensitive).
 VIDEO_EXTENSIONS: tuple[str, ...] = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".ts",
@@ -271,16 +273,61 @@ def video_output_candidates(video_out: Path) -> list[Path]:
                               for _, ext in options)) or [video_out]
 
 
-def outputs_complete(video_out: Path | None, csv_out: Path | None) -> bool:
-    """Whether a run with these outputs (None: not wanted) finished: each exists under its final name.
+def outputs_complete(video_out: Path | None, csv_out: Path | None, *, source: Path | None = None,
+                     start_frame: int = 0, max_frames: int | None = None) -> bool:
+    """Whether a run with these outputs (None: not wanted) finished: each exists under its final name and,
+    given the ``source`` video, the data file covers the frames this run would track.
 
-    Outputs are renamed to their final names only when complete, so existing means complete.
+    Outputs are renamed to their final names only when complete, so existing means a run finished; but a run
+    over other frames (a trial with ``--frames 5``, another start frame) finishes too. So the data file's
+    first row must be ``start_frame`` and its last row at least the last frame wanted: ``max_frames`` on, or
+    the end of the video as its container announces it (less 1 %, for containers that only estimate it; when
+    the count is unknown, the end is not checked).
     """
     if video_out is None and csv_out is None:
         return False
     if csv_out is not None and not csv_out.exists():
         return False
-    return video_out is None or any(p.exists() for p in video_output_candidates(video_out))
+    if video_out is not None and not any(p.exists() for p in video_output_candidates(video_out)):
+        return False
+    if csv_out is None or source is None:
+        return True
+    span = data_frame_span(csv_out)
+    if span is None or span[0] != start_frame:
+        return False
+    announced = announced_frame_count(source)
+    last_wanted = announced - 1 - announced // 100 if announced else None
+    if max_frames is not None:
+        wanted = start_frame + max_frames - 1
+        last_wanted = wanted if last_wanted is None else min(wanted, last_wanted)
+    return last_wanted is None or span[1] >= last_wanted
+
+
+def data_frame_span(path: Path) -> tuple[int, int] | None:
+    """Frame numbers of the first and last rows of an lptrack CSV or JSON Lines file (None: no rows, or not
+    such a file)."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(4096).decode("utf-8", "replace").splitlines()
+            f.seek(max(f.seek(0, os.SEEK_END) - 4096, 0))
+            tail = f.read().decode("utf-8", "replace").splitlines()
+    except OSError:
+        return None
+
+    def frame_of(line: str) -> int | None:
+        try:
+            if line.startswith("{"):
+                return int(json.loads(line)["frame"])
+            return int(line.split(",", 1)[0])
+        except (ValueError, KeyError, TypeError):
+            return None
+
+    rows = [line for line in head if line.strip() and not line.startswith("frame,")]
+    last_rows = [line for line in tail if line.strip()]
+    if not rows or not last_rows:
+        return None
+    first, last = frame_of(rows[0]), frame_of(last_rows[-1])
+    return None if first is None or last is None else (first, last)
 
 
 @dataclass(frozen=True)
@@ -364,7 +411,8 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
                                                            f"give the two videos different names or folders")
             continue
         claimed.update({p: label for p in (video_out, csv_out) if p is not None})
-        if skip_existing and outputs_complete(job.video_out, job.csv_out):
+        if skip_existing and outputs_complete(job.video_out, job.csv_out, source=job.video,
+                                              start_frame=job.start_frame, max_frames=max_frames):
             settled[label] = VideoOutcome(label, "skipped", "outputs exist")
             continue
         jobs.append(job)

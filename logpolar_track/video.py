@@ -66,6 +66,17 @@ def _open_capture(path: Path) -> cv2.VideoCapture:
     return cv2.VideoCapture(str(path))
 
 
+def announced_frame_count(path) -> int:
+    """Frame count the container of video ``path`` announces, without decoding (0 when unknown or unreadable);
+    may be approximate for containers that store only a duration (e.g. .mkv, .webm)."""
+    capture = _open_capture(Path(path))
+    try:
+        count = capture.get(cv2.CAP_PROP_FRAME_COUNT) if capture.isOpened() else 0.0
+    finally:
+        capture.release()
+    return int(count) if math.isfinite(count) and count > 0 else 0
+
+
 class VideoReader:
     """Frames of a video file as ``(index, time_s, frame)``, decoded ahead in a background thread.
 

@@ -19,12 +19,12 @@ import pytest
 from click.testing import CliRunner
 
 from conftest import _make_video
-from logpolar_track.batch import VideoInput, find_videos, plan_batch, read_roi_file, run_batch
+from logpolar_track.batch import VideoInput, data_frame_span, find_videos, plan_batch, read_roi_file, run_batch
 from logpolar_track.cli import main
 from logpolar_track.errors import UsageError
 from logpolar_track.executor import DASK_HINT
 from logpolar_track.geometry import Ellipse
-from logpolar_track.results import COLUMNS
+from logpolar_track.results import COLUMNS, header_line
 
 LPTRACK = [sys.executable, "-m", "logpolar_track"]
 
@@ -299,6 +299,35 @@ def test_skip_existing_resumes(work):
     assert (work / "out/a.lptrack.mp4").read_bytes() != b"earlier"
     refused = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1")
     assert refused.exit_code == 1 and "already exists; use --overwrite" in refused.stderr
+
+
+def test_skip_existing_redoes_a_trial_run_over_fewer_frames(work):
+    """Outputs of ``--frames 5`` (or another start frame) are complete files, but not this run's results."""
+    trial = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1", "--frames", "5")
+    assert trial.exit_code == 0 and len(csv_rows(work / "out/b.lptrack.csv")) == 5
+    full = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1", "--skip-existing")
+    assert full.exit_code == 0 and "2 videos: 2 ok, 0 failed" in full.stderr, full.stderr
+    assert len(csv_rows(work / "out/b.lptrack.csv")) == 24
+    # The same trial again is complete; the full run too; another start frame is not.
+    assert "2 skipped" in invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1",
+                                 "--skip-existing").stderr
+    again = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1", "--frames", "24",
+                   "--skip-existing")
+    assert "2 skipped" in again.stderr
+    moved = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1", "--start-frame", "2",
+                   "--skip-existing")
+    assert moved.exit_code == 0 and "2 ok" in moved.stderr
+    assert csv_rows(work / "out/b.lptrack.csv")[0]["frame"] == "2"
+
+
+def test_data_frame_span_reads_csv_and_json_lines(tmp_path):
+    csv_file, jsonl_file, empty = tmp_path / "a.csv", tmp_path / "a.jsonl", tmp_path / "e.csv"
+    csv_file.write_text(header_line() + "\n" + "".join(f"{i},0,1,1,1,1,0,1,0,1,tracked\n" for i in range(3, 900)))
+    jsonl_file.write_text("".join(f'{{"frame": {i}, "status": "tracked"}}\n' for i in range(7, 12)))
+    empty.write_text(header_line() + "\n")
+    assert data_frame_span(csv_file) == (3, 899)
+    assert data_frame_span(jsonl_file) == (7, 11)
+    assert data_frame_span(empty) is None and data_frame_span(tmp_path / "missing.csv") is None
 
 
 # -- batches cut short --------------------------------------------------------------------------------------

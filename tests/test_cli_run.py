@@ -130,6 +130,16 @@ def test_frames_limits_the_run_and_o_names_the_video(tiny_video, workdir):
     assert result.exit_code == 0 and len(read_rows(result.stdout)) == tiny_video.n_frames
 
 
+def test_skip_existing_redoes_a_trial_run_and_skips_a_finished_one(tiny_video, workdir):
+    trial = invoke(tiny_video.path, "--frames", "4", "--no-video")
+    assert trial.exit_code == 0 and len(read_rows(Path("tiny.lptrack.csv").read_text())) == 4
+    full = invoke(tiny_video.path, "--no-video", "--skip-existing")
+    assert full.exit_code == 0 and "skipped" not in full.stderr
+    assert len(read_rows(Path("tiny.lptrack.csv").read_text())) == tiny_video.n_frames
+    again = invoke(tiny_video.path, "--no-video", "--skip-existing")
+    assert again.exit_code == 0 and "outputs exist; skipped (--skip-existing)" in again.stderr
+
+
 def test_data_format_follows_the_csv_extension_unless_given(tiny_video, workdir):
     assert invoke(tiny_video.path, "--no-video", "--csv", "t.jsonl").exit_code == 0
     first = json.loads(Path("t.jsonl").read_text().splitlines()[0])

@@ -232,7 +232,9 @@ def _run_one_into(video: Path, roi, *, tracker: str, start_frame: int, max_frame
     if csv_out is None:
         csv_out = str(default_csv.with_suffix(FORMATS[data_format]))
     show = not quiet
-    if skip_existing and csv_out != "-" and outputs_complete(None if no_video else Path(video_out), Path(csv_out)):
+    if skip_existing and csv_out != "-" and outputs_complete(None if no_video else Path(video_out), Path(csv_out),
+                                                             source=video, start_frame=start_frame,
+                                                             max_frames=max_frames):
         if show:
             click.echo(f"lptrack: {video.name}: outputs exist; skipped (--skip-existing)", err=True)
         return

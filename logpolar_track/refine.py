@@ -102,10 +102,13 @@ class AppearanceSubspace:
             patch = patch - cv2.GaussianBlur(patch, (0, 0), self.highpass_sigma, borderType=cv2.BORDER_REPLICATE)
         return patch
 
-    def _distance(self, x: np.ndarray) -> float:
-        outside = x - self.basis @ (self.basis.T @ x)
-        varying = x - self._constant * float(self._constant @ x)
-        return float(np.linalg.norm(outside) / (np.linalg.norm(varying) + 1e-9))
+    def _distance(self, x: np.ndarray, outside: np.ndarray | None = None) -> float:
+        """:meth:`distance` of a weighted patch ``x``, given its part ``outside`` the subspace if known."""
+        if outside is None:
+            outside = x - self.basis @ (self.basis.T @ x)
+        constant_part = float(self._constant @ x)
+        varying = math.sqrt(max(float(x @ x) - constant_part * constant_part, 0.0))
+        return math.sqrt(float(outside @ outside)) / (varying + 1e-9)
 
     def _summary(self) -> list[np.ndarray]:
         stacked = np.stack(self._recent, axis=1)
@@ -184,6 +187,4 @@ def similarity_step(patch: np.ndarray, subspace: AppearanceSubspace, damping: fl
     normal = (jacobian.T @ jacobian - in_basis.T @ in_basis).astype(np.float64)
     normal.flat[::5] += damping * float(np.trace(normal)) / 4 + 1e-9
     _, step = cv2.solve(normal, -(jacobian.T @ error[:, None]).astype(np.float64), flags=cv2.DECOMP_CHOLESKY)
-    constant_part = float(subspace._constant @ x)
-    varying = math.sqrt(max(float(x @ x) - constant_part * constant_part, 0.0))
-    return step.ravel(), float(math.sqrt(float(error @ error)) / (varying + 1e-9))
+    return step.ravel(), subspace._distance(x, error)

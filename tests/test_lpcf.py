@@ -333,6 +333,18 @@ def test_gradient_refinement_reads_a_known_move_in_the_trackers_own_sampling(roi
     assert distance < 0.1
 
 
+def test_no_gradient_refinement_on_a_sliver():
+    """A 60 x 3 px ellipse is under a sample across: too little for the refinement's steps, which is left off."""
+    frame = random_texture(240, 320, np.random.default_rng(2))
+    tracker = create_tracker("lpcf")
+    tracker.init(frame, Ellipse(160, 120, 60, 3, 20.0))
+    assert tracker.appearance is None
+    ok, _ = tracker.update(frame)
+    assert ok and tracker.diagnostics["appearance_distance"] is None
+    tracker.init(frame, Ellipse(160, 120, 60, 20, 20.0))
+    assert tracker.appearance is not None
+
+
 def test_gradient_refinement_stands_aside_for_a_stranger():
     """Over a swapped object the patch is far from the subspace (so the refinement is not believed, and not
     tried again for the next four frames) and nothing of the stranger is learnt into it: the object is explained

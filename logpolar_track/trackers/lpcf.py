@@ -341,7 +341,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         # 0.006-0.01 on the benchmark sequences, where this holds for 55-67 % of the frames).
         motion = math.inf
         distance = None
-        refine = self.refine_steps > 0 and self.misses < self.redetect_after and self._refine_wait == 0
+        refine = self.appearance is not None and self.misses < self.redetect_after and self._refine_wait == 0
         self._refine_wait = max(self._refine_wait - 1, 0)
         for iteration in range(self.iterations):
             turned, lp_height = self._scale_rotate(frame, moved)
@@ -538,6 +538,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         nx = _even(2 * half_w * _REFINE_EXTENT / self.step) + 2
         ny = _even(2 * half_h * _REFINE_EXTENT / self.step) + 2
         self.appearance_size = nx, ny
+        if min(roi.a, roi.b) / self.step < _REFINE_MIN_SEMI_AXIS:
+            # A sliver of an ellipse (a 60 x 3 px ROI: under a sample across) gives the steps too little to stand
+            # on (seen 318 px off where the filter alone stayed within 6 px): no refinement for it.
+            return
         v, u = np.mgrid[:ny, :nx] * self.step
         u -= nx / 2.0 * self.step  # sample (p, q) lies (p - nx/2, q - ny/2) samples from the centre (see _patch)
         v -= ny / 2.0 * self.step
@@ -916,6 +920,8 @@ class _PackedPhaseCorrelator:
 #: the refinement may move the estimate at most this far from the log-polar/filter estimate.
 _REFINE_EXTENT = 1.0
 _REFINE_MAX_SAMPLES, _REFINE_MAX_LOG_SCALE, _REFINE_MAX_DEGREES = 1.5, 0.05, 3.0
+#: Least smaller semi-axis of the ROI, in samples, that the refinement runs on.
+_REFINE_MIN_SEMI_AXIS = 4.0
 #: A change of scale (natural log) or angle (degrees) measured by the first log-polar match beyond which a second
 #: match at the same centre reads the remainder before the refinement (spin, turning several degrees a frame:
 #: median rotation error 4.1 degrees without it). Always matching twice cost 0.1 ms a frame; with 0.02 and 2 the

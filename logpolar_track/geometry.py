@@ -95,13 +95,17 @@ class Ellipse:
         y = self.cy - (u * math.sin(psi) + v * math.cos(psi))
         return np.stack([x, y], axis=1)
 
-    def contains(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """Boolean mask of which pixel positions ``(x, y)`` lie inside the ellipse."""
+    def radius_squared(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Squared elliptical radius of pixel positions ``(x, y)``: 0 at the centre, 1 on the outline."""
         psi = math.radians(self.angle_deg)
         dx, dy = np.asarray(x) - self.cx, -(np.asarray(y) - self.cy)  # to a y-up frame
         u = dx * math.cos(psi) + dy * math.sin(psi)
         v = -dx * math.sin(psi) + dy * math.cos(psi)
-        return (u / self.a) ** 2 + (v / self.b) ** 2 <= 1.0
+        return (u / self.a) ** 2 + (v / self.b) ** 2
+
+    def contains(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Boolean mask of which pixel positions ``(x, y)`` lie inside the ellipse."""
+        return self.radius_squared(x, y) <= 1.0
 
     def fraction_inside(self, width: int, height: int, samples: int = 41) -> float:
         """Share of the ellipse's area that lies inside a ``width`` x ``height`` frame (0 to 1)."""

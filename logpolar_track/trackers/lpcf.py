@@ -13,13 +13,13 @@ Per frame:
    gives the change of scale and rotation, shrunk by a motion prior unless the match is near-perfect.
    Because step 2 worked in the object's frame, translation no longer corrupts this step, and because this
    step keeps the frame aligned, the filter in step 2 sees an upright, constant-size object.
-4. **Refine** (gradient refinement): after a large change of scale or angle, phase-correlate once more at the
-   same centre (the remainder of what the prior shrank); then take Gauss-Newton steps of centre, scale and angle that bring the
-   object's patch closest to its appearance subspace -- the first frame's view, the mean of recent views and
-   their leading principal components (:mod:`logpolar_track.refine`). The result is believed where the
+4. **Refine** (gradient refinement): after a large change of scale or angle, phase-correlate once more at the same
+   centre (the remainder of what the prior shrank); then take Gauss-Newton steps of centre, scale and angle that
+   bring the object's patch closest to its appearance subspace -- the first frame's view, the mean of recent views
+   and their leading principal components (:mod:`logpolar_track.refine`). The result is believed where the
    subspace explains the patch (a rigid object: a tenth of a pixel and of a degree); where it does not (a
-   deforming object, an out-of-plane turn, an occluder) steps 2 and 3 are repeated in the corrected frame
-   instead (``iterations``), unless their estimates already agree.
+   deforming object, an out-of-plane turn, an occluder) steps 2 and 3 are repeated in the corrected frame instead
+   (``iterations``), unless their estimates already agree.
 5. **Judge and learn**: the score is the match (geometric mean of the filter's response peak and the
    log-polar match height); below ``lost_threshold`` the frame is reported lost with the last good geometry.
    Only frames with a sharp filter response (peak-to-sidelobe ratio) and no sudden drop of the match update
@@ -545,10 +545,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         v, u = np.mgrid[:ny, :nx] * self.step
         u -= nx / 2.0 * self.step  # sample (p, q) lies (p - nx/2, q - ny/2) samples from the centre (see _patch)
         v -= ny / 2.0 * self.step
-        phi = math.radians(roi.angle_deg)
-        along_a = (u * math.cos(phi) - v * math.sin(phi)) / roi.a
-        along_b = (u * math.sin(phi) + v * math.cos(phi)) / roi.b
-        weights = np.clip(1.0 - (along_a ** 2 + along_b ** 2) / _REFINE_EXTENT ** 2, 0.0, 1.0)
+        radius_squared = roi.moved(0.0, 0.0).radius_squared(u, v)  # sample offsets (pixels, y down) from the centre
+        weights = np.clip(1.0 - radius_squared / _REFINE_EXTENT ** 2, 0.0, 1.0)
         # The outermost samples' gradients are one-sided; the ellipse can reach them after _even rounds down.
         weights[[0, -1], :] = weights[:, [0, -1]] = 0.0
         self.appearance = AppearanceSubspace(self._patch(frame, first, self.appearance_size), np.sqrt(weights),

@@ -133,14 +133,18 @@ def rfft2_float32(images: np.ndarray) -> np.ndarray:
 
 
 def to_gray(frame: np.ndarray, dtype=np.float32) -> np.ndarray:
-    """A BGR or grey uint8 frame as a grey image (0 to 255) of ``dtype``; the input is not modified.
+    """A grey (``(H, W)`` or ``(H, W, 1)``), BGR or BGRA frame (uint8, or float32 from 0 to 255) as a grey image
+    (0 to 255) of ``dtype``; the input is not modified.
 
     ``dtype=np.uint8`` keeps OpenCV's grey conversion as it is (a quarter of the memory of float32, which
     matters at 4K). A crop (a strided view) is copied first: converting strided rows of a frame that is not in
     cache is 1.5x slower than copying them and converting the copy.
     """
+    if frame.ndim == 3 and frame.shape[2] == 1:
+        frame = frame[:, :, 0]
     if frame.ndim == 3:
-        return cv2.cvtColor(np.ascontiguousarray(frame), cv2.COLOR_BGR2GRAY).astype(dtype, copy=False)
+        code = cv2.COLOR_BGRA2GRAY if frame.shape[2] == 4 else cv2.COLOR_BGR2GRAY
+        return cv2.cvtColor(np.ascontiguousarray(frame), code).astype(dtype, copy=False)
     return frame.astype(dtype)
 
 

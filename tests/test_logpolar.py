@@ -143,3 +143,11 @@ def test_to_gray_in_uint8_is_opencvs_conversion_and_never_the_input():
     single = gray.copy()
     again = to_gray(single, np.uint8)
     assert again is not single and np.array_equal(again, single)
+
+
+def test_to_gray_takes_a_channel_axis_and_alpha():
+    """(H, W, 1) grey and BGRA, as cv2.imread(..., cv2.IMREAD_UNCHANGED) gives them, convert like grey and BGR."""
+    frame = random_texture(40, 60, np.random.default_rng(3))
+    grey = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+    np.testing.assert_array_equal(to_gray(grey[:, :, None], np.uint8), grey)
+    np.testing.assert_array_equal(to_gray(cv2.cvtColor(frame, cv2.COLOR_BGR2BGRA), np.uint8), grey)

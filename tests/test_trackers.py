@@ -196,9 +196,42 @@ def test_update_before_init_raises():
     (np.zeros((120, 160, 3), np.uint8), Ellipse(80, 60, float("nan"), 20, 0), RoiError, "finite"),
     (np.zeros(160, np.uint8), Ellipse(80, 60, 20, 20, 0), UsageError, "(H, W)"),
     (np.zeros((120, 160, 2), np.uint8), Ellipse(80, 60, 20, 20, 0), UsageError, "(H, W)"),
+    (np.zeros((120, 160, 3)), Ellipse(80, 60, 20, 20, 0), UsageError, "uint8 (or float32 with values 0 to 255), "
+                                                                      "got float64"),
+    (np.zeros((120, 160), np.uint16), Ellipse(80, 60, 20, 20, 0), UsageError, "got uint16"),
 ])
 def test_init_refuses_what_it_cannot_track(name, frame, roi, error, fragment):
     """Called from Python, a tracker says what is wrong with its start (as ``lptrack run`` does), instead of
     dividing by zero or reporting every frame lost."""
     with pytest.raises(error, match=re.escape(fragment)):
         create_tracker(name).init(frame, roi)
+
+
+def _frame_kinds(bgr):
+    """The same picture in every layout a tracker accepts: BGR, grey, (H, W, 1) grey, BGRA, float32 BGR."""
+    grey = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)
+    return {"bgr": bgr, "grey": grey, "grey (H, W, 1)": grey[:, :, None],
+            "bgra": cv2.cvtColor(bgr, cv2.COLOR_BGR2BGRA), "float32 bgr": bgr.astype(np.float32)}
+
+
+@pytest.mark.parametrize("name", tracker_names())
+def test_every_accepted_frame_layout_tracks_alike(name):
+    """A frame from cv2.imread(..., IMREAD_UNCHANGED) (grey with a channel axis, or BGRA) or a float32 one tracks
+    as its BGR original does, for OpenCV's trackers too (which take only 3-channel uint8 themselves)."""
+    rng = np.random.default_rng(4)
+    first = cv2.GaussianBlur(random_texture(120, 160, rng), (0, 0), 1.5)
+    moved = np.roll(first, (2, 3), axis=(0, 1))
+    roi = Ellipse(80, 60, 22, 22, 0)
+    centres = {}
+    later = _frame_kinds(moved)
+    for kind, start in _frame_kinds(first).items():
+        tracker = create_tracker(name)
+        tracker.init(start, roi)
+        ok, state = tracker.update(later[kind])
+        assert ok, kind
+        centres[kind] = (state.ellipse.cx, state.ellipse.cy)
+    # Grey conversion of BGR and of BGRA is the same; the float path differs only by rounding.
+    for kind, centre in centres.items():
+        assert centre == pytest.approx(centres["grey"], abs=0.5), kind
+    if not name.startswith("cv-"):
+        assert centres["grey"] == pytest.approx((83, 62), abs=0.5)

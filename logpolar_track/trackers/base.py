@@ -134,8 +134,13 @@ class SimilarityTracker(Tracker):
 
 
 def check_start(frame: np.ndarray, roi: Ellipse) -> None:
-    """Raise unless ``frame`` is an image (``(H, W)`` grey or ``(H, W, 3|4)`` colour, not empty) and ``roi``
-    fits it (:func:`~logpolar_track.geometry.check_roi_fits`): what every tracker's ``init`` needs.
+    """Raise unless ``frame`` is an image and ``roi`` fits it (:func:`~logpolar_track.geometry.check_roi_fits`):
+    what every tracker's ``init`` needs.
+
+    An image is ``(H, W)`` or ``(H, W, 1)`` grey, ``(H, W, 3)`` BGR or ``(H, W, 4)`` BGRA, not empty, of uint8 (as
+    ``cv2.VideoCapture`` and ``cv2.imread`` give) or float32 with values from 0 to 255. Other element types are
+    refused rather than guessed at: a float image from 0 to 1 (scikit-image's convention) would track on a
+    different scale of contrast, and OpenCV's trackers take neither float64 nor 16-bit images.
 
     Raises
     ------
@@ -148,6 +153,9 @@ def check_start(frame: np.ndarray, roi: Ellipse) -> None:
     if frame.ndim not in (2, 3) or (frame.ndim == 3 and frame.shape[2] not in (1, 3, 4)) or frame.size == 0:
         raise UsageError(f"a frame must be an (H, W) grey or (H, W, 3) colour image (or 1 or 4 channels), got "
                          f"shape {frame.shape}")
+    if frame.dtype not in (np.uint8, np.float32):
+        raise UsageError(f"a frame must be uint8 (or float32 with values 0 to 255), got {frame.dtype}; convert it "
+                         f"first, e.g. with (frame * 255).clip(0, 255).astype(np.uint8) for values 0 to 1")
     values = (roi.cx, roi.cy, roi.a, roi.b, roi.angle_deg)
     if not all(math.isfinite(v) for v in values):
         raise RoiError(f"the ROI must be finite numbers, got {roi}")

@@ -97,11 +97,18 @@ class _OpenCVTracker(Tracker):
 
 
 def _bgr(frame: np.ndarray) -> np.ndarray:
-    """OpenCV's trackers expect 3-channel images; grey frames are expanded (the caller's array is untouched)."""
-    if frame.ndim == 2:
-        import cv2
+    """A frame as OpenCV's trackers take it: 3-channel uint8 BGR. Grey frames are expanded, BGRA drops alpha and
+    float32 (0 to 255) is rounded; the caller's array is untouched."""
+    import cv2
 
+    if frame.dtype != np.uint8:
+        frame = np.clip(np.rint(frame), 0, 255).astype(np.uint8)
+    if frame.ndim == 3 and frame.shape[2] == 1:
+        frame = frame[:, :, 0]
+    if frame.ndim == 2:
         return cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+    if frame.shape[2] == 4:
+        return cv2.cvtColor(frame, cv2.COLOR_BGRA2BGR)
     return frame
 
 

@@ -24,10 +24,11 @@ Per frame:
    log-polar match height); below ``lost_threshold`` the frame is reported lost with the last good geometry.
    Only frames with a sharp filter response (peak-to-sidelobe ratio) and no sudden drop of the match update
    the filter and the log-polar model (running averages), so occluders and distractors are not learnt. After
-   a few frames of such a drop the object is searched for over the whole frame, nearest patches first, two
-   patches a frame (re-detection); a patch found there is taken only if it matches the object's log-polar
-   appearance too, well enough to be reported tracked. A lost estimate at the frame's edge counts as a drop
-   (the object left the view). With ``occlusion_mask`` (``lpcf-masked``), parts of the log-polar image that
+   a few frames of such a drop the object is searched for over the whole frame (re-detection): every third
+   frame the filter is correlated with the whole frame at half its sampling density, and the best two places
+   are correlated again at full density; one is taken only if it matches the object's log-polar appearance
+   too, well enough to be reported tracked. A lost estimate near the frame's edge counts as a drop (the
+   object left the view). With ``occlusion_mask`` (``lpcf-masked``), parts of the log-polar image that
    stop matching the model are left out of step 3.
 
 This is the structure of LDES (Y. Li, J. Zhu, S. C. H. Hoi, W. Song, Z. Wang, H. Liu, "Robust estimation of
@@ -144,17 +145,17 @@ class LogPolarCorrelationTracker(SimilarityTracker):
     level_rate : float
         Running-average weight of a frame's match in the level that ``drop_ratio`` compares with.
     redetect_after : int
-        Dropped frames in a row after which the object is searched for away from the estimate: patches tiling
-        the whole frame half a patch apart, nearest to the estimate first, two a frame, at the last good
-        frame's scale and angle; what they find is taken only if it would be reported tracked. A textured disc
-        or ellipse that leaves the view and returns elsewhere, turning 0.3 degrees a frame, is found again in
-        14 of 24 generated cases (640x480 and 320x240, radius 25-45 px, back from the right 6 of 8, the left
-        7 of 8, the bottom 1 of 8; reported tracked on background while away in 1) and in the 6 of
-        tests/test_lpcf.py; the search this replaced (a ring of patches widening each frame up to two patch
-        widths, taking weaker matches) found 7 of 24 and 2 of 6. The 7 real sequences' mean IoU AUC is
-        unchanged (one start 0.492; ten starts 0.4381 against 0.4385). A searching frame costs about 0.5 ms
-        more on the default patch (four patches a frame: 0.4388, but 1 ms more and motorrolling, lost for 92
-        of its 163 frames, at 360 frames/s, not 450).
+        Dropped frames in a row after which the object is searched for away from the estimate: every third
+        frame the filter, at the last good frame's scale and angle, is correlated with the whole frame at half
+        its sampling density, and its two strongest places again at full density; what they find is taken only
+        if it would be reported tracked. A textured disc or ellipse that leaves the view and returns elsewhere,
+        turning 0.3 degrees a frame, is found again in all 24 generated cases (640x480 and 320x240, radius
+        25-45 px, back from the right, the left or the bottom; never reported tracked while away), and in the 6
+        of tests/test_lpcf.py. The searches this replaced found 14 of 24 (patches tiling the frame, nearest the
+        estimate first, two a frame: back from the bottom 1 of 8) and 7 of 24 (a ring of patches widening each
+        frame up to two patch widths). The 7 real sequences' mean IoU AUC: one start 0.525 against 0.522, ten
+        starts 0.469 against 0.464 (motorrolling and human3 gain). A search costs 8 ms at 640x480 (radius
+        25 px, one core), 30-40 ms for a part of a 4K frame.
     refine_steps : int
         Gauss-Newton steps of the gradient refinement against the appearance subspace (0: no refinement, the filter's
         and the log-polar match's iterations alone). With 2 (and the refinement's own settings below), measured
@@ -312,7 +313,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.match_level = 1.0  # the first frame matches itself perfectly
         self.cursor = self._last_good = first
         self.misses = 0
-        self._sweep, self._sweep_next = None, 0
+        self._search_part = 0  # the next part of the frame to search (see _frame_candidates)
         self._learnable = 0
         self._blur_cache = self._grey_cache = None  # the first frame is not needed any more
 
@@ -426,20 +427,18 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         return moved, psr, peak
 
     def _redetect(self, frame, state: Similarity, best: Similarity, psr: float, peak: float):
-        """While lost, also search patches tiling the whole frame, nearest to the estimate first,
-        ``_SEARCH_TILES`` patches a frame (a sweep that starts over when it has covered the frame).
+        """While lost, every ``_SEARCH_EVERY`` frames, also correlate the filter at the ``_SEARCH_CANDIDATES``
+        best places of the whole frame (:meth:`_frame_candidates`); returns the better of those and ``best``.
 
-        Patches are sampled at the scale and angle of the last frame that was not a drop: while the object is
-        away, the estimate's own scale and angle follow whatever is there (seen 20 degrees off after 30 frames,
-        where the filter no longer recognised the object when it came back).
+        The search is at the scale and angle of the last frame that was not a drop: while the object is away,
+        the estimate's own scale and angle follow whatever is there (seen 20 degrees off after 30 frames, where
+        the filter no longer recognised the object when it came back).
         """
-        if self.misses == self.redetect_after or self._sweep is None:
-            self._sweep, self._sweep_next = self._frame_tiles(state.cx, state.cy, self._last_good.scale), 0
-        take = [(self._sweep_next + k) % len(self._sweep) for k in range(min(_SEARCH_TILES, len(self._sweep)))]
-        centres = self._sweep[take]
-        self._sweep_next = (take[-1] + 1) % len(self._sweep)
-        found = None
+        if (self.misses - self.redetect_after) % _SEARCH_EVERY:
+            return best, psr, peak
         pose = self._last_good
+        centres = self._frame_candidates(frame, pose, _SEARCH_CANDIDATES)
+        found = None
         for cx, cy in centres:
             candidate = Similarity(float(cx), float(cy), pose.scale, pose.rotation_deg, state.score)
             moved, cand_psr, cand_peak = self._translate(frame, candidate)
@@ -458,15 +457,63 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             return best, psr, peak
         return found
 
-    def _frame_tiles(self, cx: float, cy: float, scale: float) -> np.ndarray:
-        """Centres (pixels, ``(n, 2)``) of patches at ``scale`` tiling the whole frame half a patch apart,
-        nearest to ``(cx, cy)`` first."""
+    def _frame_candidates(self, frame, pose: Similarity, count: int) -> np.ndarray:
+        """Centres (pixels, ``(n, 2)``, strongest first, n <= ``count``) of the strongest local maxima of the
+        filter's response over the frame, with the filter at ``pose``'s scale and angle.
+
+        The frame is sampled like a patch (turned, anti-aliased) but over all of it and at 1 / ``_SEARCH_FACTOR``
+        of the filter's density, and correlated with the filter reduced alike: a coarse map, good to a few
+        pixels, of where the object may be. A map wider or taller than ``_SEARCH_PART`` samples (a small object
+        in a large frame) is searched one overlapping part per call, in turn. (640 x 480, object radius 25 px:
+        8 ms on one core, a 4K frame's part 30-40 ms; sweeping the frame with patches of the filter's size, two
+        a frame at 0.25 ms each, found 14 of 24 objects coming back into view, against 24 now.)
+        """
         width, height = self.frame_size
-        spacing = 0.5 * min(self.size) * self.step * scale
-        xs = np.arange(0.5 * (width % spacing), width, spacing)
-        ys = np.arange(0.5 * (height % spacing), height, spacing)
-        centres = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
-        return centres[np.argsort(np.hypot(centres[:, 0] - cx, centres[:, 1] - cy), kind="stable")]
+        t = math.radians(pose.rotation_deg)
+        cos_t, sin_t = math.cos(t), math.sin(t)
+        spacing = self.step * pose.scale * _SEARCH_FACTOR  # pixels between samples of the map
+        nx = _even((width * abs(cos_t) + height * abs(sin_t)) / spacing + 2)
+        ny = _even((width * abs(sin_t) + height * abs(cos_t)) / spacing + 2)
+        kernels = self._spatial_filter(_SEARCH_FACTOR)
+        overlap = max(kernels[0].shape)  # so that an object on a part's edge is whole in the next part
+        x_starts, part_w = _part_starts(nx, _SEARCH_PART, overlap)
+        y_starts, part_h = _part_starts(ny, _SEARCH_PART, overlap)
+        index = self._search_part % (len(x_starts) * len(y_starts))
+        self._search_part += 1
+        # The part's centre, in samples from the map's centre, then in pixels (as in _patch).
+        p0 = x_starts[index % len(x_starts)] + 0.5 * (part_w - nx)
+        q0 = y_starts[index // len(x_starts)] + 0.5 * (part_h - ny)
+        c, s = spacing * cos_t, spacing * sin_t
+        cx, cy = 0.5 * (width - 1) + c * p0 + s * q0, 0.5 * (height - 1) - s * p0 + c * q0
+        centre = Similarity(cx, cy, pose.scale * _SEARCH_FACTOR, pose.rotation_deg, 0.0)
+        # The anti-aliasing blur follows the map's spacing, and the crop blurred for it is not the patches' (see
+        # _patch): put back the tracker's own scale and forget the crop afterwards.
+        blur_scale, self._blur_scale = self._blur_scale, centre.scale
+        try:
+            features = patch_features(self._patch(frame, centre, (part_w, part_h)))
+        finally:
+            self._blur_scale, self._blur_cache = blur_scale, None
+        response = np.zeros((part_h, part_w), np.float32)
+        for channel, kernel in zip(features, kernels):
+            response += cv2.filter2D(channel, cv2.CV_32F, kernel, borderType=cv2.BORDER_CONSTANT)
+        rows, cols = np.nonzero(response == cv2.dilate(response, np.ones((5, 5), np.uint8)))
+        order = np.argsort(-response[rows, cols], kind="stable")
+        p, q = cols[order] - part_w / 2.0, rows[order] - part_h / 2.0
+        xs, ys = cx + c * p + s * q, cy - s * p + c * q
+        inside = (xs >= 0) & (xs <= width - 1) & (ys >= 0) & (ys <= height - 1)
+        return np.stack([xs[inside], ys[inside]], axis=1)[:count]
+
+    def _spatial_filter(self, factor: float) -> list[np.ndarray]:
+        """The filter as ``cv2.filter2D`` kernels, one per feature channel, for samples ``factor`` times further
+        apart than the filter's own."""
+        spectra = self.numerator / (self.denominator + self.regularisation)
+        ny, nx = spectra.shape[1:]
+        size = (max(round(nx / factor), 3), max(round(ny / factor), 3))
+        # The filter convolves (circularly) and filter2D correlates: flipped, the kernel as it comes puts the
+        # response's peak on the object itself. (Its weight lies around its middle, as the object does in the
+        # patch; shifted by half a patch it would be the same filter circularly, but not over the frame.)
+        return [cv2.resize(cv2.flip(cv2.idft(spectrum, flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE), -1), size,
+                           interpolation=cv2.INTER_AREA) for spectrum in spectra]
 
     def _scale_rotate(self, frame, state: Similarity) -> tuple[Similarity, float]:
         """Change of scale and angle from the log-polar match at ``state``'s centre, and the match height.
@@ -930,10 +977,17 @@ _SECOND_MATCH_LOG_SCALE, _SECOND_MATCH_DEGREES = 0.02, 2.0
 #: 17 % of lpcf's frame rate on the 7 real sequences (crossing, human3, freeman1: up to 25 %), for a 10-start
 #: mean IoU AUC of 0.466 against 0.465 (with the later conditional second match, the refinement costs 2.5 %).
 _REFINE_HOPELESS, _REFINE_RETRY = 1.5, 5
-#: Re-detection (see ``_redetect``): patches searched a frame.
-_SEARCH_TILES = 2
+#: Re-detection (see ``_redetect``): the whole frame is searched every ``_SEARCH_EVERY`` frames (every frame:
+#: the same 10-start mean IoU AUC, 0.469, and 24 of 24 objects found coming back, at three times the cost while
+#: lost), with the filter at ``_SEARCH_FACTOR`` times its sample spacing, in parts of at most ``_SEARCH_PART``
+#: samples a side (a small object in a 4K frame would otherwise make a map of 5 million samples per feature
+#: channel; reducing the map further instead missed a 20 px object there), and the ``_SEARCH_CANDIDATES``
+#: strongest places are tried (1 or 2: the same figures).
+_SEARCH_EVERY, _SEARCH_FACTOR, _SEARCH_PART, _SEARCH_CANDIDATES = 3, 2.0, 512, 2
 #: A lost estimate closer than this many of the object's smaller semi-axes to the frame's edge counts as a drop.
-_EXIT_MARGIN = 0.5
+#: An object leaving the frame leaves the estimate up to a semi-axis or so inside it, on whatever is there; with
+#: 0.5, 3 of 24 objects were not searched for and not found when they came back (1.0: 1 of 24; 1.5: none).
+_EXIT_MARGIN = 1.5
 #: Weights of blue, green and red in OpenCV's grey conversion (``cv2.COLOR_BGR2GRAY``).
 _GREY_WEIGHTS_BGR = (0.114, 0.587, 0.299)
 #: Extra pixels around a blurred crop, so that the learning step's patch can reuse it (see ``_blurred``).
@@ -986,6 +1040,16 @@ def _agree(a: Similarity, b: Similarity) -> bool:
 def _signed_bins(n: int) -> np.ndarray:
     """Shifts ``0, 1, ..., -1`` of a circular axis of ``n`` bins, in FFT order."""
     return np.fft.fftfreq(n, 1.0 / n)
+
+
+def _part_starts(length: int, part: int, overlap: int) -> tuple[list[int], int]:
+    """First samples of the parts, at most ``part`` long and overlapping by ``overlap``, that cover
+    ``length`` samples, and their length."""
+    if length <= part:
+        return [0], length
+    stride = max(part - overlap, 1)
+    count = math.ceil((length - part) / stride) + 1
+    return [min(i * stride, length - part) for i in range(count)], part
 
 
 def _even(value: float) -> int:

@@ -314,6 +314,19 @@ def test_finds_the_object_coming_back_from_the_other_side(seed):
     assert np.median(centre_errors([results[i - 1] for i in back], [poses[i] for i in back])) <= 1.0
 
 
+def test_grey_frames_with_a_channel_axis_track_as_grey():
+    """(H, W, 1) frames (cv2.imread(..., IMREAD_UNCHANGED) of a grey PNG) give the same track as (H, W) ones,
+    also where the patches reach out of the frame, whose mean grey fills them (it was read as a BGR mean, a
+    ninth of the grey, and the track came back 191 px apart)."""
+    roi, poses, frames = _leaves_and_returns(1)
+    grey = [cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY) for frame in frames]
+    _, flat = run(grey, roi)
+    _, with_axis = run([frame[:, :, None] for frame in grey], roi)
+    assert [ok for ok, _ in flat] == [ok for ok, _ in with_axis]
+    assert max(np.hypot(a.ellipse.cx - b.ellipse.cx, a.ellipse.cy - b.ellipse.cy)
+               for (_, a), (_, b) in zip(flat, with_axis)) < 1e-6
+
+
 def test_accuracy_on_a_gentle_similarity_path():
     """The default tracker on a generated sequence: 120 frames of 640x480, circle of radius 50, the centre
     circling 60 px, scale 0.8-1.25, half a turn. Bounds: the issue's targets for scale (1.5 %) and, with

@@ -97,6 +97,7 @@ class SimilarityTracker(Tracker):
     def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
         check_start(frame, roi)
         self.roi = roi
+        self.frame_size = frame.shape[1], frame.shape[0]  # (width, height), pixels
         self.last = Similarity(roi.cx, roi.cy, 1.0, 0.0, 1.0)
         self._start(self._prepared(frame), roi)
         return self._state(self.last)
@@ -104,6 +105,8 @@ class SimilarityTracker(Tracker):
     def update(self, frame: np.ndarray) -> tuple[bool, TrackState]:
         if self.last is None:
             raise RuntimeError("update() called before init()")
+        frame = np.asarray(frame)
+        check_frame(frame, self.frame_size)
         estimate = self._estimate(self._prepared(frame), self.last)
         ok = estimate is not None and estimate.score >= self.lost_threshold and _finite(estimate)
         if ok:
@@ -133,14 +136,30 @@ class SimilarityTracker(Tracker):
         """Hook called with every estimate accepted as tracked (e.g. to update a template)."""
 
 
-def check_start(frame: np.ndarray, roi: Ellipse) -> None:
-    """Raise unless ``frame`` is an image and ``roi`` fits it (:func:`~logpolar_track.geometry.check_roi_fits`):
-    what every tracker's ``init`` needs.
+def check_frame(frame: np.ndarray, size: tuple[int, int] | None = None) -> None:
+    """Raise :class:`UsageError` unless ``frame`` is an image a tracker takes, of ``size`` ``(width, height)``
+    (pixels) if given: what every tracker's ``update`` needs (a frame of another size mid-stream would be
+    tracked in the wrong place).
 
     An image is ``(H, W)`` or ``(H, W, 1)`` grey, ``(H, W, 3)`` BGR or ``(H, W, 4)`` BGRA, not empty, of uint8 (as
     ``cv2.VideoCapture`` and ``cv2.imread`` give) or float32 with values from 0 to 255. Other element types are
     refused rather than guessed at: a float image from 0 to 1 (scikit-image's convention) would track on a
     different scale of contrast, and OpenCV's trackers take neither float64 nor 16-bit images.
+    """
+    if frame.ndim not in (2, 3) or (frame.ndim == 3 and frame.shape[2] not in (1, 3, 4)) or frame.size == 0:
+        raise UsageError(f"a frame must be an (H, W) grey or (H, W, 3) colour image (or 1 or 4 channels), got "
+                         f"shape {frame.shape}")
+    if frame.dtype != np.uint8 and frame.dtype != np.float32:
+        raise UsageError(f"a frame must be uint8 (or float32 with values 0 to 255), got {frame.dtype}; convert it "
+                         f"first, e.g. with (frame * 255).clip(0, 255).astype(np.uint8) for values 0 to 1")
+    if size is not None and (frame.shape[1], frame.shape[0]) != size:
+        raise UsageError(f"every frame must have the size of the first ({size[0]}x{size[1]} pixels), got "
+                         f"{frame.shape[1]}x{frame.shape[0]}")
+
+
+def check_start(frame: np.ndarray, roi: Ellipse) -> None:
+    """Raise unless ``frame`` is an image (:func:`check_frame`) and ``roi`` fits it
+    (:func:`~logpolar_track.geometry.check_roi_fits`): what every tracker's ``init`` needs.
 
     Raises
     ------
@@ -150,12 +169,7 @@ def check_start(frame: np.ndarray, roi: Ellipse) -> None:
         The ROI is malformed (non-finite, semi-axes too small) or does not fit the frame.
     """
     frame = np.asarray(frame)
-    if frame.ndim not in (2, 3) or (frame.ndim == 3 and frame.shape[2] not in (1, 3, 4)) or frame.size == 0:
-        raise UsageError(f"a frame must be an (H, W) grey or (H, W, 3) colour image (or 1 or 4 channels), got "
-                         f"shape {frame.shape}")
-    if frame.dtype not in (np.uint8, np.float32):
-        raise UsageError(f"a frame must be uint8 (or float32 with values 0 to 255), got {frame.dtype}; convert it "
-                         f"first, e.g. with (frame * 255).clip(0, 255).astype(np.uint8) for values 0 to 1")
+    check_frame(frame)
     values = (roi.cx, roi.cy, roi.a, roi.b, roi.angle_deg)
     if not all(math.isfinite(v) for v in values):
         raise RoiError(f"the ROI must be finite numbers, got {roi}")

@@ -25,9 +25,10 @@ Per frame:
    Only frames with a sharp filter response (peak-to-sidelobe ratio) and no sudden drop of the match update
    the filter and the log-polar model (running averages), so occluders and distractors are not learnt. After
    a few frames of such a drop the object is searched for over the whole frame (re-detection): every third
-   frame the filter is correlated with the whole frame at half its sampling density, and the best two places
-   are correlated again at full density; one is taken only if it matches the object's log-polar appearance
-   too, well enough to be reported tracked. A lost estimate near the frame's edge counts as a drop (the
+   frame the filter is correlated with the frame at half its sampling density (a large frame, one part at a
+   time, nearest the object's last place first), and the best two places are correlated again at full
+   density; one is taken only if it matches the object's log-polar appearance too, well enough to be reported
+   tracked. A lost estimate near the frame's edge counts as a drop (the
    object left the view). With ``occlusion_mask`` (``lpcf-masked``), parts of the log-polar image that
    stop matching the model are left out of step 3.
 
@@ -146,8 +147,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         Running-average weight of a frame's match in the level that ``drop_ratio`` compares with.
     redetect_after : int
         Dropped frames in a row after which the object is searched for away from the estimate: every third
-        frame the filter, at the last good frame's scale and angle, is correlated with the whole frame at half
-        its sampling density, and its two strongest places again at full density; what they find is taken only
+        frame the filter, at the last good frame's scale and angle, is correlated with the frame (or, in a large
+        frame, the next part of it) at half its sampling density, and its two strongest places again at full
+        density; what they find is taken only
         if it would be reported tracked. A textured disc or ellipse that leaves the view and returns elsewhere,
         turning 0.3 degrees a frame, is found again in all 24 generated cases (640x480 and 320x240, radius
         25-45 px, back from the right, the left or the bottom; never reported tracked while away), and in the 6
@@ -155,7 +157,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         estimate first, two a frame: back from the bottom 1 of 8) and 7 of 24 (a ring of patches widening each
         frame up to two patch widths). The 7 real sequences' mean IoU AUC: one start 0.525 against 0.522, ten
         starts 0.469 against 0.464 (motorrolling and human3 gain). A search costs 8 ms at 640x480 (radius
-        25 px, one core), 30-40 ms for a part of a 4K frame.
+        25 px, one core), 30-60 ms for a part of a 4K frame (a 20 px object there: 28-41 parts, so 84-123
+        frames to cover the frame).
     refine_steps : int
         Gauss-Newton steps of the gradient refinement against the appearance subspace (0: no refinement, the filter's
         and the log-polar match's iterations alone). With 2 (and the refinement's own settings below), measured
@@ -287,10 +290,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
 
         # The frame's mean grey (OpenCV's BGR weights), without converting the frame; float frames keep their range.
         means = cv2.mean(frame)
-        self.fill = float(np.dot(means[:3], _GREY_WEIGHTS_BGR)) if frame.ndim == 3 else float(means[0])
+        colour = frame.ndim == 3 and frame.shape[2] >= 3
+        self.fill = float(np.dot(means[:3], _GREY_WEIGHTS_BGR)) if colour else float(means[0])
         self._blur_cache = self._grey_cache = None
         self._blur_scale = 1.0
-        self.frame_size = frame.shape[1], frame.shape[0]
         first = Similarity(roi.cx, roi.cy, 1.0, 0.0, 1.0)
         spec = self._feature_spectrum(frame, first)
         self.numerator = self.label_conj * spec
@@ -387,7 +390,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             # A lost estimate pressed against the frame's edge is an object that left the view: search for its
             # return. (Without this the running level sinks to the weak match left at the edge, no drop is ever
             # seen, and the object coming back elsewhere is not searched for.)
-            margin = _EXIT_MARGIN * min(self.roi.a, self.roi.b) * refined.scale
+            # (Capped, so that a large object is not at "the edge" everywhere in the frame.)
+            margin = min(_EXIT_MARGIN * min(self.roi.a, self.roi.b) * refined.scale, 0.25 * min(width, height))
             dropped = min(refined.cx, refined.cy, width - 1 - refined.cx, height - 1 - refined.cy) < margin
         if self.occlusion_mask:
             self._update_mask(dropped)
@@ -428,7 +432,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
 
     def _redetect(self, frame, state: Similarity, best: Similarity, psr: float, peak: float):
         """While lost, every ``_SEARCH_EVERY`` frames, also correlate the filter at the ``_SEARCH_CANDIDATES``
-        best places of the whole frame (:meth:`_frame_candidates`); returns the better of those and ``best``.
+        best places of the frame, or of the next part of it (:meth:`_frame_candidates`); returns the better of
+        those and ``best``.
 
         The search is at the scale and angle of the last frame that was not a drop: while the object is away,
         the estimate's own scale and angle follow whatever is there (seen 20 degrees off after 30 frames, where
@@ -436,6 +441,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         """
         if (self.misses - self.redetect_after) % _SEARCH_EVERY:
             return best, psr, peak
+        if self.misses == self.redetect_after:
+            self._search_part = 0  # a new search starts with the part nearest the object's last place
         pose = self._last_good
         centres = self._frame_candidates(frame, pose, _SEARCH_CANDIDATES)
         found = None
@@ -461,31 +468,41 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         """Centres (pixels, ``(n, 2)``, strongest first, n <= ``count``) of the strongest local maxima of the
         filter's response over the frame, with the filter at ``pose``'s scale and angle.
 
-        The frame is sampled like a patch (turned, anti-aliased) but over all of it and at 1 / ``_SEARCH_FACTOR``
-        of the filter's density, and correlated with the filter reduced alike: a coarse map, good to a few
-        pixels, of where the object may be. A map wider or taller than ``_SEARCH_PART`` samples (a small object
-        in a large frame) is searched one overlapping part per call, in turn. (640 x 480, object radius 25 px:
-        8 ms on one core, a 4K frame's part 30-40 ms; sweeping the frame with patches of the filter's size, two
-        a frame at 0.25 ms each, found 14 of 24 objects coming back into view, against 24 now.)
+        The frame is sampled like a patch (turned, anti-aliased) but over all of it and at half the filter's
+        density, and correlated with the filter reduced alike (:meth:`_coarse_filter`): a coarse map, good to a
+        sample of the filter or so, of where the object may be. A map wider or taller than ``_SEARCH_PART``
+        samples (a small object in a large frame) is searched one overlapping part per call, nearest to
+        ``pose`` first. (640 x 480, object radius 25 px: 8 ms on one core; a part of a 4K frame 30-60 ms.
+        Sweeping the frame with patches of the filter's size, two a frame at 0.25 ms each, found 14 of 24
+        objects coming back into view, against 24 now.)
         """
         width, height = self.frame_size
         t = math.radians(pose.rotation_deg)
         cos_t, sin_t = math.cos(t), math.sin(t)
-        spacing = self.step * pose.scale * _SEARCH_FACTOR  # pixels between samples of the map
+        spacing = 2 * self.step * pose.scale  # pixels between samples of the map
         nx = _even((width * abs(cos_t) + height * abs(sin_t)) / spacing + 2)
         ny = _even((width * abs(sin_t) + height * abs(cos_t)) / spacing + 2)
-        kernels = self._spatial_filter(_SEARCH_FACTOR)
-        overlap = max(kernels[0].shape)  # so that an object on a part's edge is whole in the next part
-        x_starts, part_w = _part_starts(nx, _SEARCH_PART, overlap)
-        y_starts, part_h = _part_starts(ny, _SEARCH_PART, overlap)
-        index = self._search_part % (len(x_starts) * len(y_starts))
-        self._search_part += 1
-        # The part's centre, in samples from the map's centre, then in pixels (as in _patch).
-        p0 = x_starts[index % len(x_starts)] + 0.5 * (part_w - nx)
-        q0 = y_starts[index // len(x_starts)] + 0.5 * (part_h - ny)
+        kernels, anchor = self._coarse_filter()
+        # Parts overlap by a kernel, so that an object on a part's edge is whole in the next one.
+        kernel_h, kernel_w = kernels[0].shape
+        side = max(_SEARCH_PART, 2 * max(kernel_h, kernel_w))
+        x_starts, part_w = _part_starts(nx, side, kernel_w)
+        y_starts, part_h = _part_starts(ny, side, kernel_h)
+        # Part centres, in samples from the map's centre, then in pixels (as in _patch); parts of the turned
+        # frame's bounding box that miss the frame are left out.
+        p0 = (np.array(x_starts, float) + 0.5 * (part_w - nx))[None, :]
+        q0 = (np.array(y_starts, float) + 0.5 * (part_h - ny))[:, None]
         c, s = spacing * cos_t, spacing * sin_t
-        cx, cy = 0.5 * (width - 1) + c * p0 + s * q0, 0.5 * (height - 1) - s * p0 + c * q0
-        centre = Similarity(cx, cy, pose.scale * _SEARCH_FACTOR, pose.rotation_deg, 0.0)
+        xs = (0.5 * (width - 1) + c * p0 + s * q0).ravel()
+        ys = (0.5 * (height - 1) - s * p0 + c * q0).ravel()
+        reach_x = 0.5 * (part_w * abs(c) + part_h * abs(s))
+        reach_y = 0.5 * (part_w * abs(s) + part_h * abs(c))
+        keep = (xs > -reach_x) & (xs < width - 1 + reach_x) & (ys > -reach_y) & (ys < height - 1 + reach_y)
+        xs, ys = xs[keep], ys[keep]
+        order = np.argsort(np.hypot(xs - pose.cx, ys - pose.cy), kind="stable")
+        index = order[self._search_part % len(order)]
+        self._search_part += 1
+        centre = Similarity(float(xs[index]), float(ys[index]), 2 * pose.scale, pose.rotation_deg, 0.0)
         # The anti-aliasing blur follows the map's spacing, and the crop blurred for it is not the patches' (see
         # _patch): put back the tracker's own scale and forget the crop afterwards.
         blur_scale, self._blur_scale = self._blur_scale, centre.scale
@@ -495,26 +512,30 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self._blur_scale, self._blur_cache = blur_scale, None
         response = np.zeros((part_h, part_w), np.float32)
         for channel, kernel in zip(features, kernels):
-            response += cv2.filter2D(channel, cv2.CV_32F, kernel, borderType=cv2.BORDER_CONSTANT)
+            response += cv2.filter2D(channel, cv2.CV_32F, kernel, anchor=anchor, borderType=cv2.BORDER_CONSTANT)
         rows, cols = np.nonzero(response == cv2.dilate(response, np.ones((5, 5), np.uint8)))
-        order = np.argsort(-response[rows, cols], kind="stable")
-        p, q = cols[order] - part_w / 2.0, rows[order] - part_h / 2.0
-        xs, ys = cx + c * p + s * q, cy - s * p + c * q
+        strongest = np.argsort(-response[rows, cols], kind="stable")
+        p, q = cols[strongest] - part_w / 2.0, rows[strongest] - part_h / 2.0
+        xs, ys = centre.cx + c * p + s * q, centre.cy - s * p + c * q
         inside = (xs >= 0) & (xs <= width - 1) & (ys >= 0) & (ys <= height - 1)
         return np.stack([xs[inside], ys[inside]], axis=1)[:count]
 
-    def _spatial_filter(self, factor: float) -> list[np.ndarray]:
-        """The filter as ``cv2.filter2D`` kernels, one per feature channel, for samples ``factor`` times further
-        apart than the filter's own."""
+    def _coarse_filter(self) -> tuple[list[np.ndarray], tuple[int, int]]:
+        """The filter as ``cv2.filter2D`` kernels, one per feature channel, for samples twice as far apart as
+        the filter's own, and their anchor ``(x, y)``: with both, a response's peak falls on the object's
+        sample."""
         spectra = self.numerator / (self.denominator + self.regularisation)
         ny, nx = spectra.shape[1:]
-        size = (max(round(nx / factor), 3), max(round(ny / factor), 3))
-        # The filter convolves (circularly) and filter2D correlates: flipped, the kernel as it comes puts the
-        # response's peak on the object itself. (Its weight lies around its middle, as the object does in the
-        # patch; shifted by half a patch it would be the same filter circularly, but not over the frame.)
-        return [cv2.resize(cv2.flip(cv2.idft(spectrum, flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE), -1), size,
-                           interpolation=cv2.INTER_AREA) for spectrum in spectra]
-
+        # Even offsets from the patch's centre (nx/2, ny/2) survive the halving, so the anchor is a sample.
+        y0, x0 = (ny // 2) % 2, (nx // 2) % 2
+        halve = np.array([0.25, 0.5, 0.25], np.float32)
+        kernels = []
+        for spectrum in spectra:
+            # The filter convolves circularly; filter2D correlates: the kernel is h(-k mod n).
+            kernel = np.roll(cv2.flip(cv2.idft(spectrum, flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE), -1), 1, (0, 1))
+            kernel = cv2.sepFilter2D(kernel, -1, halve, halve, borderType=cv2.BORDER_CONSTANT)
+            kernels.append(np.ascontiguousarray(kernel[y0::2, x0::2]))
+        return kernels, ((nx // 2 - x0) // 2, (ny // 2 - y0) // 2)
     def _scale_rotate(self, frame, state: Similarity) -> tuple[Similarity, float]:
         """Change of scale and angle from the log-polar match at ``state``'s centre, and the match height.
 
@@ -977,13 +998,13 @@ _SECOND_MATCH_LOG_SCALE, _SECOND_MATCH_DEGREES = 0.02, 2.0
 #: 17 % of lpcf's frame rate on the 7 real sequences (crossing, human3, freeman1: up to 25 %), for a 10-start
 #: mean IoU AUC of 0.466 against 0.465 (with the later conditional second match, the refinement costs 2.5 %).
 _REFINE_HOPELESS, _REFINE_RETRY = 1.5, 5
-#: Re-detection (see ``_redetect``): the whole frame is searched every ``_SEARCH_EVERY`` frames (every frame:
-#: the same 10-start mean IoU AUC, 0.469, and 24 of 24 objects found coming back, at three times the cost while
-#: lost), with the filter at ``_SEARCH_FACTOR`` times its sample spacing, in parts of at most ``_SEARCH_PART``
-#: samples a side (a small object in a 4K frame would otherwise make a map of 5 million samples per feature
-#: channel; reducing the map further instead missed a 20 px object there), and the ``_SEARCH_CANDIDATES``
-#: strongest places are tried (1 or 2: the same figures).
-_SEARCH_EVERY, _SEARCH_FACTOR, _SEARCH_PART, _SEARCH_CANDIDATES = 3, 2.0, 512, 2
+#: Re-detection (see ``_redetect``): the frame, or the next part of it, is searched every ``_SEARCH_EVERY``
+#: frames (every frame: the same 10-start mean IoU AUC, 0.469, and 24 of 24 objects found coming back, at three
+#: times the cost while lost), with the filter at half its sampling density, in parts of at most
+#: ``_SEARCH_PART`` samples a side (a small object in a 4K frame would otherwise make a map of 5 million samples
+#: per feature channel; reducing the map further instead missed a 20 px object there), and the
+#: ``_SEARCH_CANDIDATES`` strongest places are tried (1 or 2: the same figures).
+_SEARCH_EVERY, _SEARCH_PART, _SEARCH_CANDIDATES = 3, 512, 2
 #: A lost estimate closer than this many of the object's smaller semi-axes to the frame's edge counts as a drop.
 #: An object leaving the frame leaves the estimate up to a semi-axis or so inside it, on whatever is there; with
 #: 0.5, 3 of 24 objects were not searched for and not found when they came back (1.0: 1 of 24; 1.5: none).

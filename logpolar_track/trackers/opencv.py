@@ -27,7 +27,7 @@ import math
 import numpy as np
 
 from ..geometry import Ellipse, ellipse_in_box
-from .base import Tracker, TrackState, check_start, register
+from .base import Tracker, TrackState, check_frame, check_start, register
 
 _CONTRIB_HINT = ("needs opencv-contrib-python-headless instead of opencv-python-headless "
                  "(swap them: pip uninstall opencv-python-headless && pip install opencv-contrib-python-headless)")
@@ -77,6 +77,7 @@ class _OpenCVTracker(Tracker):
         cv2.setRNGSeed(self.seed)
         self._tracker = self._create()
         self._tracker.init(_bgr(frame), box)
+        self._frame_size = frame.shape[1], frame.shape[0]
         self._size0 = math.sqrt(box[2] * box[3])
         self._last = self._state(box, 1.0)
         return self._last
@@ -84,6 +85,8 @@ class _OpenCVTracker(Tracker):
     def update(self, frame: np.ndarray) -> tuple[bool, TrackState]:
         if self._tracker is None:
             raise RuntimeError("update() called before init()")
+        frame = np.asarray(frame)
+        check_frame(frame, self._frame_size)
         ok, box = self._tracker.update(_bgr(frame))
         box = tuple(float(v) for v in box)
         if not ok or box[2] <= 0 or box[3] <= 0 or not all(math.isfinite(v) for v in box):

@@ -272,7 +272,8 @@ def test_whole_frame_search_points_at_the_object(size, radius, place):
     """The coarse whole-frame correlation (re-detection) puts its strongest place within a few pixels of the
     object, turned 10 degrees, anywhere in the frame. A small object in a large frame is searched one part of
     the frame per call (here 12 parts, in turn); the object is found in the part that holds it. Measured:
-    1.2 and 4.0 px at 640x480 (one part), 1.5 px at 1920x1080 (the others' places are 385-1570 px away)."""
+    1.2 and 1.6 px at 640x480 (one part), 0.3 px at 1920x1080 (the other parts' places are 386-1571 px away;
+    before the kernel's half-sample alignment was right, 1.2, 4.0 and 1.5 px)."""
     width, height = size
     rng = np.random.default_rng(5)
     background = random_texture(height, width, rng)
@@ -303,8 +304,8 @@ def _leaves_and_comes_back_from_below(seed):
 @pytest.mark.parametrize("seed", [6, 7])
 def test_finds_the_object_coming_back_from_the_other_side(seed):
     """The estimate left at the right edge is not where the object comes back; the whole-frame search finds it
-    there, on every frame it shows whole. Seeds 0-7: all 8 found, while still partly below the frame in 7
-    (median 0.02-0.07 px off); the search before (patches of the filter's size swept over the frame nearest
+    there, on every frame it shows whole. Seeds 0-7: all 8 found, while still partly below the frame (median
+    0.02-0.05 px off once whole); the search before (patches of the filter's size swept over the frame nearest
     the estimate first, two a frame) found 6, and not seeds 6 and 7."""
     roi, poses, frames = _leaves_and_comes_back_from_below(seed)
     _, results = run(frames, roi)

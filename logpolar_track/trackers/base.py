@@ -95,6 +95,7 @@ class SimilarityTracker(Tracker):
         self.last: Similarity | None = None
 
     def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
+        frame = np.asarray(frame)
         check_start(frame, roi)
         self.roi = roi
         self.frame_size = frame.shape[1], frame.shape[0]  # (width, height), pixels

@@ -28,9 +28,9 @@ Per frame:
    frame the filter is correlated with the frame at half its sampling density (a large frame, one part at a
    time, nearest the object's last place first), and the best two places are correlated again at full
    density; one is taken only if it matches the object's log-polar appearance too, well enough to be reported
-   tracked. A lost estimate near the frame's edge counts as a drop (the
-   object left the view). With ``occlusion_mask`` (``lpcf-masked``), parts of the log-polar image that
-   stop matching the model are left out of step 3.
+   tracked. A lost estimate near the frame's edge counts as a drop (the object left the view). With
+   ``occlusion_mask`` (``lpcf-masked``), parts of the log-polar image that stop matching the model are left
+   out of step 3.
 
 This is the structure of LDES (Y. Li, J. Zhu, S. C. H. Hoi, W. Song, Z. Wang, H. Liu, "Robust estimation of
 similarity transformation for visual object tracking", AAAI 2019), with a simpler filter, and of the thesis'
@@ -146,19 +146,18 @@ class LogPolarCorrelationTracker(SimilarityTracker):
     level_rate : float
         Running-average weight of a frame's match in the level that ``drop_ratio`` compares with.
     redetect_after : int
-        Dropped frames in a row after which the object is searched for away from the estimate: every third
-        frame the filter, at the last good frame's scale and angle, is correlated with the frame (or, in a large
-        frame, the next part of it) at half its sampling density, and its two strongest places again at full
-        density; what they find is taken only
-        if it would be reported tracked. A textured disc or ellipse that leaves the view and returns elsewhere,
-        turning 0.3 degrees a frame, is found again in all 24 generated cases (640x480 and 320x240, radius
-        25-45 px, back from the right, the left or the bottom; never reported tracked while away), and in the 6
-        of tests/test_lpcf.py. The searches this replaced found 14 of 24 (patches tiling the frame, nearest the
-        estimate first, two a frame: back from the bottom 1 of 8) and 7 of 24 (a ring of patches widening each
-        frame up to two patch widths). The 7 real sequences' mean IoU AUC: one start 0.525 against 0.522, ten
-        starts 0.469 against 0.464 (motorrolling and human3 gain). A search costs 8 ms at 640x480 (radius
-        25 px, one core), 30-60 ms for a part of a 4K frame (a 20 px object there: 28-41 parts, so 84-123
-        frames to cover the frame).
+        Dropped frames in a row after which the object is searched for away from the estimate: every third frame the
+        filter, at the last good frame's scale and angle, is correlated with the frame (or, in a large frame, the
+        next part of it) at half its sampling density, and its two strongest places again at full density; what they
+        find is taken only if it would be reported tracked. A textured disc or ellipse that leaves the view and
+        returns elsewhere, turning 0.3 degrees a frame, is found again in all 24 generated cases (640x480 and
+        320x240, radius 25-45 px, back from the right, the left or the bottom; never reported tracked while away),
+        and in the 6 of tests/test_lpcf.py. The searches this replaced found 14 of 24 (patches tiling the frame,
+        nearest the estimate first, two a frame: back from the bottom 1 of 8) and 7 of 24 (a ring of patches
+        widening each frame up to two patch widths). The 7 real sequences' mean IoU AUC: one start 0.525 against
+        0.522, ten starts 0.469 against 0.464 (motorrolling and human3 gain). A search costs 8 ms at 640x480 (radius
+        25 px, one core), 30-60 ms for a part of a 4K frame (a 20 px object there: 28-41 parts, so 84-123 frames to
+        cover the frame).
     refine_steps : int
         Gauss-Newton steps of the gradient refinement against the appearance subspace (0: no refinement, the filter's
         and the log-polar match's iterations alone). With 2 (and the refinement's own settings below), measured
@@ -389,8 +388,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         if match < self.lost_threshold and not dropped:
             # A lost estimate pressed against the frame's edge is an object that left the view: search for its
             # return. (Without this the running level sinks to the weak match left at the edge, no drop is ever
-            # seen, and the object coming back elsewhere is not searched for.)
-            # (Capped, so that a large object is not at "the edge" everywhere in the frame.)
+            # seen, and the object coming back elsewhere is not searched for.) The margin is capped so that a large
+            # object is not at "the edge" everywhere in the frame.
             margin = min(_EXIT_MARGIN * min(self.roi.a, self.roi.b) * refined.scale, 0.25 * min(width, height))
             dropped = min(refined.cx, refined.cy, width - 1 - refined.cx, height - 1 - refined.cy) < margin
         if self.occlusion_mask:
@@ -536,6 +535,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             kernel = cv2.sepFilter2D(kernel, -1, halve, halve, borderType=cv2.BORDER_CONSTANT)
             kernels.append(np.ascontiguousarray(kernel[y0::2, x0::2]))
         return kernels, ((nx // 2 - x0) // 2, (ny // 2 - y0) // 2)
+
     def _scale_rotate(self, frame, state: Similarity) -> tuple[Similarity, float]:
         """Change of scale and angle from the log-polar match at ``state``'s centre, and the match height.
 

@@ -65,6 +65,7 @@ class _OpenCVTracker(Tracker):
         return getattr(cv2, self._cv_class).create()
 
     def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
+        frame = np.asarray(frame)
         check_start(frame, roi)
         x, y, w, h = roi.bounding_box()
         # OpenCV takes an integer box; round the corners so the box stays centred on the ROI.

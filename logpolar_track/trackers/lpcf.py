@@ -523,7 +523,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         """The filter as ``cv2.filter2D`` kernels, one per feature channel, for samples twice as far apart as
         the filter's own, and their anchor ``(x, y)``: with both, a response's peak falls on the object's
         sample."""
-        spectra = self.numerator / (self.denominator + self.regularisation)
+        spectra = self._filter_spectra()
         ny, nx = spectra.shape[1:]
         # Even offsets from the patch's centre (nx/2, ny/2) survive the halving, so the anchor is a sample.
         y0, x0 = (ny // 2) % 2, (nx // 2) % 2
@@ -705,8 +705,12 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self.lp_mask = cv2.resize(visibility, (self.n_theta, self.n_rho), interpolation=cv2.INTER_LINEAR)
 
     def _filter(self) -> None:
-        """The filter ``numerator / (denominator + regularisation)``, ready for :meth:`_PackedSpectra.correlate`."""
-        self._filter_parts = self.spectra.multiplier(self.numerator / (self.denominator + self.regularisation))
+        """The filter (:meth:`_filter_spectra`), ready for :meth:`_PackedSpectra.correlate`."""
+        self._filter_parts = self.spectra.multiplier(self._filter_spectra())
+
+    def _filter_spectra(self) -> np.ndarray:
+        """The filter's packed spectra ``(C, h, w)``: ``numerator / (denominator + regularisation)``."""
+        return self.numerator / (self.denominator + self.regularisation)
 
     def _lp_references(self) -> None:
         """Spectra of the log-polar model and anchor (only the model when the anchor's weight is 0), computed

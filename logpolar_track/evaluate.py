@@ -46,7 +46,6 @@ All metric functions are pure functions of numpy arrays.
 
 from __future__ import annotations
 
-import csv
 import math
 import re
 from dataclasses import dataclass, field
@@ -487,20 +486,24 @@ def _float(text) -> float:
 
 
 def _read_csv_columns(path, required: tuple[str, ...], what: str) -> tuple[list[dict], list[str]]:
+    """Rows (as ``{column: text}``) and header of a CSV file, or of JSON lines as ``lptrack run`` writes them
+    (:func:`~logpolar_track.results.read_data_rows`), with the ``required`` columns."""
+    from .results import read_data_rows  # here, not at the top: results imports the trackers (OpenCV)
+
     path = Path(path)
     try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            reader = csv.DictReader(fh)
-            header = [h.strip() for h in (reader.fieldnames or [])]
-            reader.fieldnames = header
-            rows = list(reader)
-    except OSError as exc:
-        raise GroundTruthError(f"cannot read {what} '{path}': {exc.strerror or exc}") from None
+        header, body = read_data_rows(path)
+    except (OSError, UnicodeDecodeError) as exc:
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else "not a text file"
+        raise GroundTruthError(f"cannot read {what} '{path}': {why}") from None
+    except ValueError as exc:
+        raise GroundTruthError(f"{what} '{path}': {exc}") from None
     missing = [c for c in required if c not in header]
     if missing:
         raise GroundTruthError(f"{what} '{path}' lacks column(s) {', '.join(missing)}; expected a header "
                                f"with {','.join(required)}")
-    return rows, header
+    # A short row's missing fields read as empty, as csv.DictReader gives them.
+    return [{c: row[i] if i < len(row) else None for i, c in enumerate(header)} for _, row in body], header
 
 
 def read_gt_csv(path) -> GroundTruth:

@@ -25,7 +25,6 @@ subclasses; they never print.
 
 from __future__ import annotations
 
-import csv
 import math
 import os
 from dataclasses import dataclass
@@ -39,7 +38,7 @@ from .draw import LOST_COLOUR, TRACKED_COLOUR, draw_state
 from .errors import FrameRangeError, OutputError, RoiError, UsageError, VideoError
 from .evaluate import GroundTruthError, Track, read_ground_truth, rotation_errors, scale_errors, score_track
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
-from .results import COLUMNS, STATUSES, FrameResult
+from .results import COLUMNS, STATUSES, FrameResult, read_data_rows
 from .trackers.base import TrackState
 from .video import VideoReader, check_output_path, temporary_path
 
@@ -112,7 +111,8 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None) -
     index : int, optional
         Frame index, 0 = first frame of the file. Default 0.
     time_s : float, optional
-        Instead of ``index``: time in seconds; the frame is ``round(time_s * fps)``.
+        Instead of ``index``: time in seconds; the frame is ``round(time_s * fps)``, or the last frame for a
+        time within its time on screen (before ``frame count / fps``).
 
     Returns
     -------
@@ -154,9 +154,13 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None) -
             raise
         with VideoReader(path) as reader:
             fps = reader.fps
+        if time_s is not None and n and time_s < n / fps:
+            # Within the last frame's time on screen, rounded up past it: that frame is the one shown.
+            return read_frame(path, n - 1)
         asked = f"frame {index}" if time_s is None else f"time {time_s:g} s (frame {index} at {fps:g} fps)"
-        raise FrameRangeError(f"{asked} lies past the end of '{path}', which has {n} frames: give a frame from "
-                              f"0 to {n - 1} (or a time from 0 to {(n - 1) / fps:.3f} s)") from None
+        frames = f"{n} frame" + ("" if n == 1 else "s")
+        raise FrameRangeError(f"{asked} lies past the end of '{path}', which has {frames}: give a frame from "
+                              f"0 to {n - 1} (or a time before {n / fps:.3f} s)") from None
     with reader:
         return Frame(reader.first_frame.copy(), index, reader.time_of(index), reader.fps, reader.fps_guessed,
                      path)
@@ -368,7 +372,8 @@ def roi_from_box(box, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
     """
     values = _parse_numbers(box, "box") if isinstance(box, str) else [float(v) for v in box]
     if len(values) != 4:
-        raise RoiError(f"box '{box}' has {len(values)} number(s); expected x,y,w,h (top-left corner and size "
+        count = f"{len(values)} number" + ("" if len(values) == 1 else "s")
+        raise RoiError(f"box '{box}' has {count}; expected x,y,w,h (top-left corner and size "
                        f"in pixels)")
     x, y, w, h = values
     if w <= 0 or h <= 0:
@@ -533,27 +538,24 @@ def read_run_csv(path) -> RunTable:
     """
     path = Path(path)
     expected = ",".join(COLUMNS)
-    hint = f"expected an lptrack run CSV with the header {expected}"
+    hint = f"expected an lptrack run CSV with the header {expected}, or its JSON lines"
     try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            rows = list(csv.reader(fh))
+        header, body = read_data_rows(path)
     except (OSError, UnicodeDecodeError) as exc:
         why = exc.strerror if isinstance(exc, OSError) and exc.strerror else "not a text file"
         raise GroundTruthError(f"cannot read run CSV '{path}': {why}") from None
-    if not rows:
+    except ValueError as exc:
+        raise GroundTruthError(f"run data '{path}': {exc}; {hint}") from None
+    if not header:
         raise GroundTruthError(f"run CSV '{path}' is empty; {hint}")
-    header = [h.strip() for h in rows[0]]
     if tuple(header[:len(COLUMNS)]) != COLUMNS:
         got = ",".join(header)[:80]
         raise GroundTruthError(f"run CSV '{path}' has the header '{got}'; {hint}")
-    body = [r for r in rows[1:] if any(f.strip() for f in r)]
     if not body:
         raise GroundTruthError(f"run CSV '{path}' has a header but no rows")
     numeric = ("time_s", "cx", "cy", "a", "b", "angle_deg", "scale", "score")
     table = {c: [] for c in COLUMNS}
-    for line, row in enumerate(rows[1:], start=2):
-        if not any(f.strip() for f in row):
-            continue
+    for line, row in body:
         if len(row) < len(COLUMNS):
             raise GroundTruthError(f"run CSV '{path}' line {line} has {len(row)} fields; expected "
                                    f"{len(COLUMNS)} ({expected})")

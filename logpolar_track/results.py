@@ -153,6 +153,51 @@ def json_line(fields: list[str], *, video: str | None = None) -> str:
     return json.dumps(record, separators=(",", ":")) + "\n"
 
 
+def read_data_rows(path) -> tuple[list[str], list[tuple[int, list[str]]]]:
+    """The header and the rows of a run's data file, as :class:`CsvWriter` writes it in either format.
+
+    A CSV file gives its header line and fields as written. A file of JSON lines (its first non-blank
+    character is ``{``) gives the first object's keys as the header and each line's values in that order as
+    text: ``null`` or a missing key as an empty field, numbers as Python prints them. Blank lines are skipped.
+
+    Returns
+    -------
+    header : list of str
+        Column names, stripped; empty for an empty file.
+    rows : list of (int, list of str)
+        The file's line number (1-based) and the fields of each non-blank row after the header.
+
+    Raises
+    ------
+    OSError, UnicodeDecodeError
+        The file cannot be read as UTF-8 text.
+    ValueError
+        A JSON line is not an object; the message gives its line number.
+    """
+    with open(path, newline="", encoding="utf-8-sig") as fh:
+        text = fh.read()
+    if not text.lstrip().startswith("{"):
+        rows = [(n, r) for n, r in enumerate(csv.reader(io.StringIO(text)), start=1) if any(f.strip() for f in r)]
+        if not rows:
+            return [], []
+        return [h.strip() for h in rows[0][1]], rows[1:]
+    header: list[str] = []
+    rows = []
+    for n, line in enumerate(text.splitlines(), start=1):
+        if not line.strip():
+            continue
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError:
+            record = None
+        if not isinstance(record, dict):
+            raise ValueError(f"line {n} is not a JSON object")
+        if not header:
+            header = [str(k).strip() for k in record]
+        rows.append((n, ["" if record.get(k) is None else str(record[k]) for k in header]))
+    return header, rows
+
+
 @contextlib.contextmanager
 def stdout_errors():
     """Turn a failed write of rows to stdout (a full disk behind it) into an :class:`OutputError`; a closed

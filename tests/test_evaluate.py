@@ -262,3 +262,23 @@ def test_read_gt_csv_and_run_csv(tmp_path):
     (tmp_path / "bad.csv").write_text("frame,cx\n0,1\n")
     with pytest.raises(GroundTruthError, match="lacks column"):
         read_gt_csv(tmp_path / "bad.csv")
+
+
+def test_run_data_reads_the_same_as_csv_or_json_lines(tmp_path):
+    """``lptrack run --format jsonl`` output is scored like its CSV (``null`` rotation as NaN); a line that is not
+    a JSON object is named by its line number."""
+    from logpolar_track.results import COLUMNS, json_line
+
+    rows = [["0", "0.000000", "50.000", "40.000", "20.000", "10.000", "30.000", "1.00000", "", "1.0000", "init"],
+            ["1", "0.040000", "52.500", "40.000", "22.000", "11.000", "40.000", "1.10000", "", "0.9000", "tracked"]]
+    as_csv, as_jsonl = tmp_path / "run.csv", tmp_path / "run.jsonl"
+    as_csv.write_text(",".join(COLUMNS) + "\n" + "".join(",".join(r) + "\n" for r in rows))
+    as_jsonl.write_text("".join(json_line(r) for r in rows))
+    a, b = read_track_csv(as_csv), read_track_csv(as_jsonl)
+    assert b.frames.tolist() == [0, 1] and b.status == ["init", "tracked"]
+    for field in ("ellipses", "scale", "rotation_deg", "score"):
+        np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+    assert np.isnan(b.rotation_deg).all()
+    as_jsonl.write_text(json_line(rows[0]) + "not json\n")
+    with pytest.raises(GroundTruthError, match="line 2 is not a JSON object"):
+        read_track_csv(as_jsonl)

@@ -77,6 +77,14 @@ def test_read_frame_at_a_time_rounds_to_the_nearest_frame(tiny_video):
     assert np.array_equal(frame.image, sequential_frames(tiny_video.path)[15])
 
 
+def test_read_frame_at_a_time_on_the_last_frame_is_the_last_frame(tiny_video):
+    """A time while the last frame is on screen (19.6 frames at 30 fps: rounds to 20, past the end) gives it; the
+    end of the video does not."""
+    assert read_frame(tiny_video.path, time_s=19.6 / 30).index == 19
+    with pytest.raises(UsageError, match=r"a time before 0.667 s"):
+        read_frame(tiny_video.path, time_s=20 / 30)
+
+
 def test_read_frame_past_the_end_gives_the_valid_range(tiny_video):
     with pytest.raises(UsageError, match=r"frame 20 lies past the end .* 20 frames: give a frame from 0 to 19"):
         read_frame(tiny_video.path, 20)
@@ -270,6 +278,20 @@ def test_read_run_csv_follows_the_contract(tiny_run, tmp_path):
     assert "line 3" in messages["status"] and "init, tracked, lost" in messages["status"]
     assert "line 4" in messages["number"] and "'abc' is not a number" in messages["number"]
     assert "empty" in messages["empty"]
+
+
+def test_json_lines_of_a_run_read_back_as_its_csv(tiny_run, tmp_path):
+    """What ``run --format jsonl`` writes, ``plot``, ``sheet`` and ``eval`` read as the CSV."""
+    video, run_csv, _ = tiny_run
+    jsonl = tmp_path / "tiny.lptrack.jsonl"
+    result = invoke("run", video.path, "--tracker", "diffdecomp", "--no-video", "--csv", jsonl, "--quiet")
+    assert result.exit_code == 0, result.stderr
+    a, b = read_run_csv(run_csv), read_run_csv(jsonl)
+    assert list(b.frames) == list(a.frames) and b.status == a.status
+    for field in ("time_s", "ellipses", "scale", "rotation_deg", "score"):
+        np.testing.assert_array_equal(getattr(b, field), getattr(a, field))
+    result = invoke("sheet", video.path, jsonl, "-o", tmp_path / "sheet.png")
+    assert result.exit_code == 0, result.stderr
 
 
 def test_sheet_has_the_expected_size_and_shows_the_run(tiny_run, tmp_path):

@@ -146,19 +146,26 @@ def parse_roi(spec: str) -> Ellipse:
     ------
     RoiError
         If the text has the wrong number of fields, a field is not a finite number, or a radius is not > 0.
+
+    Notes
+    -----
+    The angle may be any finite number of degrees; it is wrapped into (-180, 180].
     """
     text = str(spec).strip()
-    fields = [f.strip() for f in text.split(",")] if text else []
+    if not text:
+        raise RoiError(f"the ROI is empty; expected {ROI_SYNTAX}")
+    fields = [f.strip() for f in text.split(",")]
     if len(fields) == 1 and len(text.replace(";", " ").split()) > 1:
         raise RoiError(f"ROI '{spec}': separate the numbers with commas; expected {ROI_SYNTAX}")
     if "" in fields and len(fields) > 1:
         raise RoiError(f"ROI '{spec}' has an empty field (a stray comma?); expected {ROI_SYNTAX}")
-    if len(fields) not in (3, 5):
-        raise RoiError(f"ROI '{spec}' has {len(fields)} number(s); expected {ROI_SYNTAX}")
     try:
         values = [float(f) for f in fields]
     except ValueError:
         raise RoiError(f"ROI '{spec}' is not a list of numbers; expected {ROI_SYNTAX}") from None
+    if len(values) not in (3, 5):
+        count = f"{len(values)} number" + ("" if len(values) == 1 else "s")
+        raise RoiError(f"ROI '{spec}' has {count}; expected {ROI_SYNTAX}")
     if not all(math.isfinite(v) for v in values):
         raise RoiError(f"ROI '{spec}' contains a non-finite number; expected {ROI_SYNTAX}")
     if len(values) == 3:
@@ -169,7 +176,8 @@ def parse_roi(spec: str) -> Ellipse:
     cx, cy, a, b, angle = values
     if a <= 0 or b <= 0:
         raise RoiError(f"ROI '{spec}': semi-axes must be > 0 pixels, got a={_fmt(a)}, b={_fmt(b)}")
-    return Ellipse(cx, cy, a, b, angle)
+    # Any angle names a direction; wrapped here, a huge one (1e308) cannot swamp the rotation added to it later.
+    return Ellipse(cx, cy, a, b, wrap_degrees(angle))
 
 
 def check_roi_fits(roi: Ellipse, width: int, height: int, *, source: str | None = None,

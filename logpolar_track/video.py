@@ -139,16 +139,13 @@ class VideoReader:
                 self._cap.release()
                 if skipped == 0:
                     raise VideoError(f"video '{self.path}' contains no frames")
-                raise FrameRangeError(f"start frame {self.start_frame} lies past the end of '{self.path}', "
-                                 f"which has {skipped} frames; give a start frame from 0 to {skipped - 1}")
+                raise _past_the_end(self.start_frame, self.path, skipped)
         ok, first = self._cap.read()
         if not ok or first is None or first.size == 0:
             self._cap.release()
             if self.start_frame == 0:
                 raise VideoError(f"video '{self.path}' contains no frames (empty or unreadable video)")
-            raise FrameRangeError(f"start frame {self.start_frame} lies past the end of '{self.path}', "
-                             f"which has {self.start_frame} frames; give a start frame from 0 "
-                             f"to {self.start_frame - 1}")
+            raise _past_the_end(self.start_frame, self.path, self.start_frame)
         self.first_frame: np.ndarray = first
         self.height, self.width = first.shape[:2]
         self._queue: queue.Queue = queue.Queue(maxsize=self._read_ahead)
@@ -244,6 +241,13 @@ class VideoReader:
                 self._queue.get_nowait()
             except queue.Empty:
                 break
+
+
+def _past_the_end(start_frame: int, path: Path, n_frames: int) -> FrameRangeError:
+    frames = f"{n_frames} frame" + ("" if n_frames == 1 else "s")
+    valid = "0" if n_frames == 1 else f"from 0 to {n_frames - 1}"
+    return FrameRangeError(f"start frame {start_frame} lies past the end of '{path}', which has {frames}; give a "
+                           f"start frame {valid}")
 
 
 def keep_frames_off_the_heap(threshold_bytes: int = 10 << 20) -> None:

@@ -20,9 +20,9 @@ def test_parse_roi_accepts(spec, expected):
 
 
 @pytest.mark.parametrize("spec, fragment", [
-    ("1,2", "has 2 number(s)"),
-    ("", "has 0 number(s)"),
-    ("1,2,3,4", "has 4 number(s)"),
+    ("1,2", "has 2 numbers"),
+    ("", "is empty"),
+    ("1,2,3,4", "has 4 numbers"),
     ("a,b,c", "not a list of numbers"),
     ("1,2,nan", "non-finite"),
     ("1,2,inf", "non-finite"),
@@ -119,3 +119,14 @@ def test_contains_follows_rotation():
 @pytest.mark.parametrize("angle, wrapped", [(0, 0), (180, 180), (-180, 180), (190, -170), (720, 0), (-361, -1)])
 def test_wrap_degrees(angle, wrapped):
     assert wrap_degrees(angle) == pytest.approx(wrapped)
+
+
+@pytest.mark.parametrize("angle, wrapped", [("370", 10.0), ("-90", -90.0), ("-180", 180.0), ("1e308", None)])
+def test_parse_roi_wraps_any_angle(angle, wrapped):
+    """Any finite angle names a direction: it is kept wrapped into (-180, 180], so that even an absurd one
+    (1e308, whose sum with a rotation would lose the rotation) tracks like its wrapped value."""
+    roi = parse_roi(f"100,80,30,20,{angle}")
+    assert -180 < roi.angle_deg <= 180
+    if wrapped is not None:
+        assert roi.angle_deg == pytest.approx(wrapped)
+    assert roi.angle_deg + 5.0 - roi.angle_deg == pytest.approx(5.0)

@@ -56,6 +56,8 @@ def test_start_frame_skips_exactly(tiny_video):
 def test_start_frame_past_end_says_how_many_frames(tiny_video):
     with pytest.raises(VideoError, match=r"past the end .* has 20 frames"):
         VideoReader(tiny_video.path, start_frame=20)
+    with pytest.raises(VideoError, match=r"which has 20 frames; give a start frame from 0 to 19"):
+        VideoReader(tiny_video.path, start_frame=25)
 
 
 def test_close_early_stops_the_decoding_thread(tiny_video):

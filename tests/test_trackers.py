@@ -253,3 +253,20 @@ def test_update_refuses_what_it_cannot_track(name, frame, fragment):
     tracker.init(random_texture(120, 160, np.random.default_rng(0)), Ellipse(80, 60, 20, 20, 0))
     with pytest.raises(UsageError, match=re.escape(fragment)):
         tracker.update(frame)
+
+
+@pytest.mark.parametrize("name", [n for n in tracker_names() if n.startswith("cv-")])
+def test_opencv_trackers_report_the_roi_moved_and_scaled(name):
+    """OpenCV's box trackers report the ROI's own ellipse (its semi-axes times ``scale``, its angle kept), moved
+    with their box: the first state is the ROI exactly, as the run CSV's init row must be."""
+    roi = Ellipse(160, 110, 40, 26, 30)
+    poses = [Pose(160 + k, 110 + 0.5 * k, 1.0, 0.0) for k in range(15)]
+    frames = list(synthetic_sequence(poses, roi, size=(320, 240), seed=4))
+    tracker = create_tracker(name)
+    assert tracker.init(frames[0], roi).ellipse == roi
+    for frame, pose in zip(frames[1:], poses[1:]):
+        ok, state = tracker.update(frame)
+        e = state.ellipse
+        assert state.rotation_deg is None and e.angle_deg == roi.angle_deg
+        assert (e.a, e.b) == pytest.approx((roi.a * state.scale, roi.b * state.scale))
+        assert math.hypot(e.cx - pose.cx, e.cy - pose.cy) <= 3.0

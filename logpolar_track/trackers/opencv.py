@@ -14,8 +14,9 @@ The contrib wheel replaces the plain one (they must not be installed together: u
 
 OpenCV's trackers follow an axis-aligned box and measure no rotation. The adapters start them on the ROI's
 axis-aligned bounding box (rounded to whole pixels, as OpenCV takes integer boxes) and report, per frame, the
-ellipse inscribed in the returned box (angle 0), ``scale = sqrt(w*h) / sqrt(w0*h0)`` against the initial box,
-``rotation_deg = None``, and ``score`` 1.0 when OpenCV says ok, else 0.0 (OpenCV gives no confidence). MIL says
+ROI's own ellipse (its angle kept) moved by as much as the box's centre moved and scaled by
+``scale = sqrt(w*h) / sqrt(w0*h0)`` against the initial box, so the first state is the ROI itself;
+``rotation_deg = None``; and ``score`` 1.0 when OpenCV says ok, else 0.0 (OpenCV gives no confidence). MIL says
 ok even when the target is gone; KCF and CSRT can report a loss. ``init`` seeds OpenCV's random number
 generator (keyword ``seed``, default 0) so that runs are repeatable: MIL draws random samples.
 """
@@ -26,7 +27,7 @@ import math
 
 import numpy as np
 
-from ..geometry import Ellipse, ellipse_in_box
+from ..geometry import Ellipse
 from .base import Tracker, TrackState, check_frame, check_start, register
 
 _CONTRIB_HINT = ("needs opencv-contrib-python-headless instead of opencv-python-headless "
@@ -44,6 +45,8 @@ class _OpenCVTracker(Tracker):
         self._tracker = None
         self._size0 = 1.0
         self._last: TrackState | None = None
+        self._roi: Ellipse | None = None
+        self._box0 = (0, 0, 1, 1)
 
     @classmethod
     def available(cls) -> bool:
@@ -79,8 +82,9 @@ class _OpenCVTracker(Tracker):
         self._tracker = self._create()
         self._tracker.init(_bgr(frame), box)
         self._frame_size = frame.shape[1], frame.shape[0]
+        self._roi, self._box0 = roi, box
         self._size0 = math.sqrt(box[2] * box[3])
-        self._last = self._state(box, 1.0)
+        self._last = TrackState(roi, 1.0, None, 1.0)
         return self._last
 
     def update(self, frame: np.ndarray) -> tuple[bool, TrackState]:
@@ -96,8 +100,13 @@ class _OpenCVTracker(Tracker):
         return True, self._last
 
     def _state(self, box, score: float) -> TrackState:
+        # Moved by the box's displacement, not centred on the box: the initial box was rounded to whole pixels.
         x, y, w, h = box
-        return TrackState(ellipse_in_box(x, y, w, h), math.sqrt(w * h) / self._size0, None, score)
+        x0, y0, w0, h0 = self._box0
+        scale = math.sqrt(w * h) / self._size0
+        cx = self._roi.cx + (x + w / 2.0) - (x0 + w0 / 2.0)
+        cy = self._roi.cy + (y + h / 2.0) - (y0 + h0 / 2.0)
+        return TrackState(self._roi.moved(cx, cy, scale), scale, None, score)
 
 
 def _bgr(frame: np.ndarray) -> np.ndarray:

@@ -52,13 +52,16 @@ def read_roi_sidecar(video_path) -> Ellipse | None:
     """The initial ROI stored next to a video, or None if there is no sidecar.
 
     The sidecar is ``<folder>/<stem>.roi`` (e.g. ``spin.roi`` for ``spin.mp4``) or ``<video file name>.roi``
-    (``spin.mp4.roi``): one line in ``--roi`` syntax; blank lines and lines starting with ``#`` are ignored.
+    (``spin.mp4.roi``): one line in ``--roi`` syntax. ``#`` starts a comment, to the end of its line; blank
+    lines are ignored.
 
     Raises
     ------
     RoiError
-        If a sidecar exists but does not hold a valid ROI (the message names the file).
+        If a sidecar exists but does not hold exactly one valid ROI, or both sidecars exist and disagree (the
+        message names the files).
     """
+    found: list[tuple[Path, Ellipse]] = []
     for candidate in roi_sidecar_paths(video_path):
         if not candidate.is_file():
             continue
@@ -66,14 +69,22 @@ def read_roi_sidecar(video_path) -> Ellipse | None:
             text = candidate.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as exc:
             raise RoiError(f"cannot read ROI file '{candidate}': {exc}") from None
-        lines = [ln.strip() for ln in text.splitlines() if ln.strip() and not ln.strip().startswith("#")]
+        lines = [(n, ln.split("#", 1)[0].strip()) for n, ln in enumerate(text.splitlines(), start=1)]
+        lines = [(n, ln) for n, ln in lines if ln]
         if not lines:
             raise RoiError(f"ROI file '{candidate}' is empty; write one line {ROI_SYNTAX}")
+        if len(lines) > 1:
+            raise RoiError(f"ROI file '{candidate}' holds {len(lines)} lines (lines "
+                           f"{', '.join(str(n) for n, _ in lines)}); write one line {ROI_SYNTAX}")
         try:
-            return parse_roi(lines[0])
+            found.append((candidate, parse_roi(lines[0][1])))
         except RoiError as exc:
             raise RoiError(f"ROI file '{candidate}': {exc}") from None
-    return None
+    if len(found) == 2 and found[0][1] != found[1][1]:
+        (first, a), (second, b) = found
+        raise RoiError(f"ROI files '{first}' ({a.to_spec()}) and '{second}' ({b.to_spec()}) disagree; keep one, "
+                       f"or give --roi")
+    return found[0][1] if found else None
 
 
 def _resolve_roi(roi: RoiLike, video_path) -> Ellipse:

@@ -438,3 +438,23 @@ def test_out_dir_that_cannot_be_made_is_one_line_for_a_batch_too(tiny_video, wor
 def test_scheduler_with_one_video_runs_it_as_a_batch(tiny_video, workdir):
     result = invoke(tiny_video.path, "--scheduler", "tcp://127.0.0.1:1", "--out", "x.mp4")
     assert result.exit_code == 2 and "with --scheduler give --out-dir DIR" in result.stderr
+
+
+def test_roi_sidecar_comments_and_ambiguities(tmp_path):
+    """``#`` starts a comment anywhere on a line; a sidecar with two ROIs, or two sidecars that disagree, is an
+    error naming the files, not a silent choice."""
+    video = tmp_path / "clip.mp4"
+    (tmp_path / "clip.roi").write_text("10,20,30  # the ball\n\n")
+    assert read_roi_sidecar(video) == Ellipse.circle(10, 20, 30)
+    (tmp_path / "clip.mp4.roi").write_text("10,20,30\n")  # the same ROI twice is no ambiguity
+    assert read_roi_sidecar(video) == Ellipse.circle(10, 20, 30)
+    (tmp_path / "clip.mp4.roi").write_text("10,20,31\n")
+    with pytest.raises(RoiError, match="clip.roi.*clip.mp4.roi.*disagree"):
+        read_roi_sidecar(video)
+    (tmp_path / "clip.mp4.roi").unlink()
+    (tmp_path / "clip.roi").write_text("10,20,30\n# next\n40,50,10\n")
+    with pytest.raises(RoiError, match=r"clip.roi' holds 2 lines \(lines 1, 3\); write one line"):
+        read_roi_sidecar(video)
+    (tmp_path / "clip.roi").write_text("# nothing yet\n")
+    with pytest.raises(RoiError, match="clip.roi' is empty"):
+        read_roi_sidecar(video)

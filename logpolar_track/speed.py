@@ -366,7 +366,7 @@ def _verdict(met: bool | None, text: str) -> str:
 def format_report(doc: dict) -> str:
     """The report of :func:`speed_report` as two Markdown tables (trackers, then end to end) and notes."""
     lines = ["| tracker | circle ms/frame (fps) | ellipse ms/frame (fps) | thesis circle / ellipse s/frame "
-             f"| speed-up circle / ellipse | issue-7 target (circle; ellipse <= {ELLIPSE_RATIO_MAX:g}x circle) |",
+             f"| speed-up circle / ellipse | project target (circle; ellipse <= {ELLIPSE_RATIO_MAX:g}x circle) |",
              "|---|---|---|---|---|---|"]
     for r in doc["trackers"]:
         thesis = speedup = "-"
@@ -383,7 +383,7 @@ def format_report(doc: dict) -> str:
     e = doc["end_to_end"]
     pct = int(round(100 * END_TO_END_FRACTION))
     lines += ["", f"| end to end (circle video, mp4v, {e['frames']} frames) | ms/frame | frames/s "
-                  "| throughput vs baseline | issue-7 target |",
+                  "| throughput vs baseline | project target |",
               "|---|---|---|---|---|",
               f"| decode only | {e['decode_ms']:.2f} | {e['decode_fps']:.0f} | - | - |",
               f"| decode + encode | {e['decode_encode_ms']:.2f} | {e['decode_encode_fps']:.0f} | - | - |"]

@@ -4,17 +4,35 @@ Public names: the ROI type and parser, the tracker interface and registry, :func
 frame) and :func:`run_video` (what ``lptrack run`` does: annotated video and CSV).
 """
 
+import importlib
 from importlib.metadata import PackageNotFoundError, version
 
 from .errors import LptrackError, OutputError, RoiError, UsageError, VideoError
-from .geometry import Ellipse, parse_roi
-from .trackers import Tracker, TrackState, create_tracker, tracker_names
-from .pipeline import run_video, track_video
 
 try:
     __version__ = version("logpolar-track")
 except PackageNotFoundError:  # running from a source tree that was not installed
     __version__ = "0+unknown"
 
+#: Public names imported on first use (PEP 562): ``import logpolar_track`` (and so the ``lptrack`` script, see
+#: :mod:`logpolar_track.__main__`) does not wait for NumPy and OpenCV, and a Ctrl-C during those imports can be
+#: handled.
+_LAZY = {"Ellipse": "geometry", "parse_roi": "geometry", "Tracker": "trackers", "TrackState": "trackers",
+         "create_tracker": "trackers", "tracker_names": "trackers", "track_video": "pipeline",
+         "run_video": "pipeline"}
+
 __all__ = ["Ellipse", "parse_roi", "Tracker", "TrackState", "create_tracker", "tracker_names", "track_video",
            "run_video", "LptrackError", "RoiError", "VideoError", "OutputError", "UsageError", "__version__"]
+
+
+def __getattr__(name: str):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -1,4 +1,30 @@
-from .cli import main
+"""The ``lptrack`` console script and ``python -m logpolar_track``: the CLI, with Ctrl-C handled from the first
+instant.
+
+The CLI imports NumPy and OpenCV (about 0.3 s); a Ctrl-C during those imports would end in a KeyboardInterrupt
+traceback before the CLI's own handling exists. The package imports them lazily (see ``logpolar_track.__init__``),
+so this module can catch that and end as the CLI does on Ctrl-C.
+"""
+
+import os
+import sys
+
+#: :data:`logpolar_track.cli.EXIT_INTERRUPTED`, repeated: importing it is the heavy import guarded here.
+EXIT_INTERRUPTED = 130
+
+
+def main() -> int:
+    """Run ``lptrack``; a Ctrl-C before the CLI can handle it ends with its one line and exit code 130."""
+    try:
+        from .cli import main as cli_main
+
+        return cli_main()
+    except KeyboardInterrupt:
+        if os.environ.get("LPTRACK_DEBUG"):
+            raise
+        sys.stderr.write("lptrack: interrupted\n")
+        return EXIT_INTERRUPTED
+
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

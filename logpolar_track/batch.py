@@ -28,7 +28,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import IO, Callable, Iterable
 
-from .errors import RoiError, UsageError
+from .errors import LptrackError, RoiError, UsageError
 from .executor import TaskOutcome, run_tasks
 from .geometry import ROI_SYNTAX, Ellipse, parse_roi
 from .pipeline import CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, run_video
@@ -141,7 +141,18 @@ def is_video_name(path: Path) -> bool:
             and not path.stem.endswith(OUTPUT_STEM_SUFFIX))
 
 
-def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None) -> list[VideoInput]:
+def video_key(path) -> Path:
+    """What makes two names of a video the same input: its folder resolved, its own file name kept.
+
+    ``a.mp4``, ``./a.mp4`` and ``sub/../a.mp4`` are one input; a symbolic link to ``a.mp4`` is an input of its
+    own, with its own outputs and ``.roi`` sidecar named after the link, as ``find`` and FFmpeg treat it.
+    """
+    path = Path(path).absolute()
+    return path.parent.resolve() / path.name
+
+
+def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None,
+                on_duplicate: Callable[[Path], None] | None = None) -> list[VideoInput]:
     """The videos named by ``inputs``, in order, each once.
 
     Parameters
@@ -149,9 +160,13 @@ def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None) -> list[
     inputs : iterable of str
         Video files (kept even if missing: they fail as videos later, without stopping the others), folders
         (searched recursively for :func:`is_video_name` files, sorted by path) and ``-`` (one path per line
-        from ``stdin``; blank lines and lines starting with ``#`` ignored).
+        from ``stdin``; blank lines and lines starting with ``#`` ignored). A video named again (the same
+        :func:`video_key`: a file also found in a folder given, a line repeated) is kept once, where it came
+        first; links to one file are different videos.
     stdin : text stream, optional
         Where ``-`` reads (default ``sys.stdin``).
+    on_duplicate : callable, optional
+        Called with the path of each video named again, as it is dropped.
 
     Raises
     ------
@@ -162,10 +177,12 @@ def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None) -> list[
     seen: set[Path] = set()
 
     def add(video: VideoInput) -> None:
-        key = video.path.resolve()
+        key = video_key(video.path)
         if key not in seen:
             seen.add(key)
             found.append(video)
+        elif on_duplicate is not None:
+            on_duplicate(video.path)
 
     read_stdin = False
     for text in inputs:
@@ -206,14 +223,16 @@ def read_roi_file(path) -> list[RoiEntry]:
 
     Raises
     ------
+    LptrackError
+        The file cannot be read (missing, a folder, not text): exit code 1, as for any unreadable input.
     UsageError
-        The file cannot be read, or a line is malformed (the message gives its number), or lists a video twice.
+        A line is malformed (the message gives its number), or lists a video twice.
     """
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
-        raise UsageError(f"cannot read ROI file '{path}': {getattr(exc, 'strerror', None) or exc}") from None
+        raise LptrackError(f"cannot read ROI file '{path}': {getattr(exc, 'strerror', None) or exc}") from None
     entries: list[RoiEntry] = []
     seen: dict[Path, int] = {}
     expected = f"video,roi[,start_frame][,tracker] with roi {ROI_SYNTAX}"
@@ -224,27 +243,44 @@ def read_roi_file(path) -> list[RoiEntry]:
             continue
         where = f"ROI file '{path}' line {number}"
         video_text = row[0].strip()
-        # Unquoted ROIs spread over several fields; quoted ones hold commas: flatten both the same way.
-        values = [v.strip() for field_ in row[1:] for v in field_.split(",") if v.strip()]
-        tracker = values.pop() if values and not _is_number(values[-1]) else None
-        start_frame = None
-        if len(values) in (4, 6):
-            start_text = values.pop()
-            if not start_text.isdigit():
-                raise UsageError(f"{where}: start_frame must be a frame index >= 0, got '{start_text}'")
-            start_frame = int(start_text)
-        if not video_text or len(values) not in (3, 5):
+        if not video_text:
             raise UsageError(f"{where}: expected {expected}, got '{','.join(row)}'")
+        if len(row) > 1 and "," in row[1]:
+            # A quoted ROI: the columns are exactly video,roi,start_frame,tracker.
+            roi_text, rest = row[1], [v.strip() for v in row[2:]]
+            if len(rest) > 2:
+                raise UsageError(f"{where}: expected {expected}, got {len(rest)} columns after the ROI")
+            start_text = rest[0] if rest else ""
+            tracker = rest[1] if len(rest) > 1 and rest[1] else None
+            tracker_hint = " (for a tracker and no start frame, leave the column empty: video,\"roi\",,tracker)"
+        else:
+            # An unquoted ROI spreads over 3 or 5 columns; a start frame is a 4th or 6th number, and a tracker
+            # name, not being a number, can only be the last column.
+            values = [v.strip() for v in row[1:] if v.strip()]
+            tracker = values.pop() if values and not _is_number(values[-1]) else None
+            start_text = values.pop() if len(values) in (4, 6) else ""
+            if len(values) not in (3, 5):
+                raise UsageError(f"{where}: expected {expected}, got '{','.join(row)}'")
+            roi_text, tracker_hint = ",".join(values), ""
+        start_frame = None
+        if start_text:
+            if not start_text.isdigit():
+                raise UsageError(f"{where}: the start_frame column holds '{start_text}'; it takes a frame index "
+                                 f">= 0 (0 = first frame), or nothing{tracker_hint}")
+            start_frame = int(start_text)
         try:
-            roi = parse_roi(",".join(values))
+            roi = parse_roi(roi_text)
         except RoiError as exc:
             raise UsageError(f"{where}: {exc}") from None
         if tracker is not None:
-            tracker_class(tracker)  # an unknown name is a UsageError listing the known ones
+            try:
+                tracker_class(tracker)  # an unknown name is a UsageError listing the known ones
+            except UsageError as exc:
+                raise UsageError(f"{where}: in the tracker column, {exc}") from None
         video = Path(video_text)
         if not video.is_absolute():
             video = path.parent / video
-        key = video.resolve()
+        key = video_key(video)
         if key in seen:
             raise UsageError(f"{where}: '{video_text}' is already listed on line {seen[key]}")
         seen[key] = number
@@ -260,9 +296,9 @@ def _data_suffix(data_format: str) -> str:
 
 def _relative_names(videos: list[VideoInput]) -> list[Path]:
     """Each input's path relative to its root folder; loose files relative to their common folder."""
-    loose = [v.path.resolve().parent for v in videos if v.root is None]
+    loose = [video_key(v.path).parent for v in videos if v.root is None]
     common = Path(os.path.commonpath(loose)) if loose else None
-    return [v.path.relative_to(v.root) if v.root is not None else v.path.resolve().relative_to(common)
+    return [v.path.relative_to(v.root) if v.root is not None else video_key(v.path).relative_to(common)
             for v in videos]
 
 
@@ -380,7 +416,7 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         Replace existing outputs; or leave alone every video whose outputs all exist (status ``skipped``) and
         redo the others, replacing whatever part of their outputs exists.
     """
-    entries = {e.video.resolve(): e for e in roi_entries}
+    entries = {video_key(e.video): e for e in roi_entries}
     if not videos:
         videos = [VideoInput(e.video) for e in entries.values()]
     out_dir = Path(out_dir).resolve()
@@ -398,8 +434,8 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         folder = out_dir / base.parent
         video_out = folder / f"{base.name}{VIDEO_OUT_SUFFIX}" if video else None
         csv_out = None if stream else folder / f"{base.name}{_data_suffix(data_format)}"
-        entry = entries.get(item.path.resolve())
-        job = VideoJob(label=label, video=item.path.resolve(), roi=entry.roi if entry else roi,
+        entry = entries.get(video_key(item.path))
+        job = VideoJob(label=label, video=video_key(item.path), roi=entry.roi if entry else roi,
                        tracker=(entry.tracker if entry and entry.tracker else tracker),
                        start_frame=(entry.start_frame if entry and entry.start_frame is not None else start_frame),
                        max_frames=max_frames, video_out=video_out, csv_out=csv_out, data_format=data_format,

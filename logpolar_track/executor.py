@@ -16,6 +16,7 @@ workers must see the same files at the same paths (a shared file system), as wit
 
 from __future__ import annotations
 
+import gc
 import multiprocessing
 import os
 import signal
@@ -110,7 +111,7 @@ def run_tasks(function: TaskFunction, items: Sequence, *, jobs: int = 1, schedul
     Raises
     ------
     UsageError
-        ``scheduler`` given but Dask is not installed.
+        ``scheduler`` given but Dask is not installed, or not an address.
     LptrackError
         The Dask scheduler cannot be reached.
     KeyboardInterrupt
@@ -153,8 +154,11 @@ def _ignore(signum, frame):
 def _worker_main(connection, function, item) -> None:
     """Body of a worker process: run one task, send ``("progress", n)`` messages then one final message."""
     # SIGTERM from the parent (its Ctrl-C) unwinds like Ctrl-C, so the task deletes its temporary outputs.
+    # Ctrl-C itself reaches the whole process group, and the parent answers it with that SIGTERM: a worker
+    # acting on both would unwind a second time inside the clean-up of the first (Python then prints
+    # "Exception ignored in: <generator ...>" tracebacks), so it leaves SIGINT to the parent.
+    signal.signal(signal.SIGINT, _ignore)
     signal.signal(signal.SIGTERM, _interrupt)
-    keep_frames_off_the_heap()
     last = 0.0
 
     def report(done: int) -> None:
@@ -168,6 +172,8 @@ def _worker_main(connection, function, item) -> None:
                 raise KeyboardInterrupt from None  # the parent is gone: stop, deleting temporary outputs
 
     try:
+        # Set-up inside the try: a worker stopped as it starts (Ctrl-C, `| head` gone) ends quietly too.
+        keep_frames_off_the_heap()
         message = ("done", function(item, report))
     except KeyboardInterrupt:
         message = ("error", "interrupted")
@@ -289,13 +295,26 @@ def _run_on_dask(function, items, scheduler) -> Iterator[TaskOutcome]:
     except ImportError:
         raise UsageError(DASK_HINT) from None
     own_client = not isinstance(scheduler, Client)
+    client = scheduler
     if own_client:
+        malformed = unreachable = None
         try:
             client = Client(scheduler, timeout="15s", set_as_default=False)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise LptrackError(f"cannot reach the Dask scheduler '{scheduler}': {describe_exception(exc)}") from None
-    else:
-        client = scheduler
+        except ValueError as exc:  # the address itself: 'nonsense', 'tcp://host' without a port
+            malformed = str(exc)
+        except (OSError, TimeoutError) as exc:
+            unreachable = describe_exception(exc)
+        if malformed is not None or unreachable is not None:
+            # A Client that failed half-made lingers in reference cycles (and in the caught exception's
+            # traceback, hence outside the except clauses). Left to the end of the interpreter, its __del__
+            # waits 30 s for its event loop, stopped by then; collected now, while the loop runs, it closes at
+            # once.
+            gc.collect()
+        if malformed is not None:
+            raise UsageError(f"--scheduler '{scheduler}' is not a Dask scheduler address ({malformed}); give "
+                             f"one like tcp://10.0.0.5:8786")
+        if unreachable is not None:
+            raise LptrackError(f"cannot reach the Dask scheduler '{scheduler}': {unreachable}")
     futures = {}
     try:
         for index, item in enumerate(items):

@@ -16,7 +16,7 @@ from typing import Callable, Iterator, Union
 import numpy as np
 
 from .draw import draw_state
-from .errors import OutputError, RoiError, UsageError
+from .errors import LptrackError, OutputError, RoiError, UsageError
 from .geometry import ROI_SYNTAX, Ellipse, check_roi_fits, parse_roi
 from . import trackers as _trackers
 from .results import CsvWriter, FrameResult
@@ -57,6 +57,8 @@ def read_roi_sidecar(video_path) -> Ellipse | None:
 
     Raises
     ------
+    LptrackError
+        A sidecar exists but cannot be read (exit code 1).
     RoiError
         If a sidecar exists but does not hold exactly one valid ROI, or both sidecars exist and disagree (the
         message names the files).
@@ -68,7 +70,7 @@ def read_roi_sidecar(video_path) -> Ellipse | None:
         try:
             text = candidate.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as exc:
-            raise RoiError(f"cannot read ROI file '{candidate}': {exc}") from None
+            raise LptrackError(f"cannot read ROI file '{candidate}': {exc}") from None  # unreadable input: exit 1
         lines = [(n, ln.split("#", 1)[0].strip()) for n, ln in enumerate(text.splitlines(), start=1)]
         lines = [(n, ln) for n, ln in lines if ln]
         if not lines:

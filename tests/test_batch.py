@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import multiprocessing
 import os
 import re
 import shutil
@@ -169,7 +170,12 @@ def test_roi_file_parsing(tmp_path):
     assert entries[2].start_frame == 7 and entries[2].roi == Ellipse(1, 2, 3, 4, 5)
     for bad, fragment in (("a.mp4,1,2\n", "line 1: expected video,roi"),
                           ("a.mp4,1,2,3\nb.mp4,1,2,3,x,y\n", "line 2"),
-                          ("a.mp4,1,2,3,nosuch\n", "unknown tracker 'nosuch'"),
+                          ("a.mp4,1,2,3,nosuch\n", ("bad.csv' line 1: in the tracker column, unknown tracker "
+                                                    "'nosuch'; choose one of: ")),
+                          # Quoted, the ROI is one column: the next one is start_frame, whatever it holds.
+                          ("a.mp4,\"1,2,3\",abc\n", ("bad.csv' line 1: the start_frame column holds 'abc'; it "
+                                                     "takes a frame index >= 0")),
+                          ("a.mp4,\"1,2,3\",0,fixed,x\n", "line 1: expected video,roi"),
                           ("a.mp4,1,2,3\na.mp4,4,5,6\n", "already listed on line 1")):
         (tmp_path / "bad.csv").write_text(bad)
         with pytest.raises(UsageError, match=re.escape(fragment)):
@@ -181,6 +187,32 @@ def test_bad_roi_file_is_a_usage_error(work):
     result = invoke("--roi-file", "rois.csv", "--no-video")
     assert result.exit_code == 2
     assert result.stderr.startswith("lptrack: error: ROI file 'rois.csv' line 1: expected video,roi")
+
+
+def test_roi_file_listing_no_videos_is_a_usage_error_as_empty_stdin_is(work):
+    (work / "empty.csv").write_text("")
+    (work / "header.csv").write_text("video,roi,start_frame,tracker\n# none yet\n")
+    for args, stdin, message in (
+            (("--roi-file", "empty.csv"), None, ("no videos found in ROI file 'empty.csv': write one line per "
+                                                 "video, video,roi[,start_frame][,tracker]")),
+            (("--roi-file", "header.csv"), None, "no videos found in ROI file 'header.csv': "),
+            (("-",), "", "no videos found in '-'")):
+        result = invoke(*args, "--no-video", stdin=stdin)
+        assert result.exit_code == 2, result.stderr
+        lines = result.stderr.splitlines()
+        assert len(lines) == 1 and lines[0].startswith(f"lptrack: error: {message}"), result.stderr
+    assert sorted(os.listdir(work)) == ["empty.csv", "footage", "header.csv"]
+
+
+@pytest.mark.parametrize("make", ["missing", "folder"])
+def test_unreadable_roi_file_is_an_input_failure(work, make):
+    # Exit 1 as for any input file that cannot be read (README: errors), not 2.
+    if make == "folder":
+        (work / "rois.csv").mkdir()
+    result = invoke("footage/day1", "--roi-file", "rois.csv", "--no-video")
+    assert result.exit_code == 1, result.stderr
+    assert result.stderr.startswith("lptrack: error: cannot read ROI file 'rois.csv': ")
+    assert len(result.stderr.splitlines()) == 1
 
 
 def test_find_videos_sorts_and_skips_outputs_and_hidden_files(tmp_path):
@@ -227,11 +259,46 @@ def test_bad_batch_arguments(work, args, fragment):
 
 
 def test_folder_without_videos_is_a_usage_error(work):
+    # A folder given as the video is a folder of videos: with none in it, nothing can run (exit 2, as README).
     (work / "empty").mkdir()
     (work / "rois.csv").write_text("footage/day1/a.mp4,80,60,20\n")
     for args in (("empty",), ("empty", "--roi-file", "rois.csv")):
         result = invoke(*args, "--roi", "80,60,20")
-        assert result.exit_code == 2 and result.stderr == "lptrack: error: no videos found in 'empty'\n"
+        assert result.exit_code == 2
+        assert result.stderr == ("lptrack: error: no videos found in 'empty' (folders are searched for .mp4, "
+                                 ".m4v, .mov, .avi, .mkv, ... files)\n")
+
+
+def _links(folder: Path, target: Path, names) -> None:
+    folder.mkdir()
+    for name in names:
+        try:
+            (folder / name).symlink_to(target)
+        except (OSError, NotImplementedError):
+            pytest.skip("cannot make symbolic links here")
+
+
+def test_links_to_one_video_are_videos_of_their_own(work):
+    _links(work / "links", work / "footage/day1/a.mp4", ["l1.mp4", "l2.mp4", "l3.mp4"])
+    result = invoke("links", "--roi", "80,60,20", "--out-dir", "out", "--no-video", "--jobs", "1")
+    assert result.exit_code == 0, result.stderr
+    assert "lptrack: 3 videos: 3 ok, 0 failed;" in result.stderr
+    assert files_under(work / "out") == ["l1.lptrack.csv", "l2.lptrack.csv", "l3.lptrack.csv"]
+    # Named directly too, each link keeps its own name (not its target's).
+    result = invoke("links/l1.mp4", "links/l2.mp4", "--roi", "80,60,20", "--csv", "-", "--no-video", "--jobs", "1")
+    assert result.exit_code == 0, result.stderr
+    assert [r["video"] for r in csv_rows(result.stdout) if r["status"] == "init"] == ["links/l1.mp4", "links/l2.mp4"]
+
+
+def test_the_same_video_named_twice_runs_once_and_says_so(work):
+    result = invoke("footage/day1", "footage/day1/a.mp4", "./footage/day1/b.mp4", "--out-dir", "out", "--no-video",
+                    "--jobs", "1")
+    assert result.exit_code == 0, result.stderr
+    assert "lptrack: 2 videos: 2 ok, 0 failed;" in result.stderr
+    notes = [line for line in result.stderr.splitlines() if "named more than once" in line]
+    assert notes == ["lptrack: note: 'footage/day1/a.mp4' is named more than once; tracked once",
+                     "lptrack: note: 'footage/day1/b.mp4' is named more than once; tracked once"]
+    assert files_under(work / "out") == ["a.lptrack.csv", "b.lptrack.csv"]
 
 
 def test_video_without_roi_and_roi_outside_frame_fail_alone(work):
@@ -272,6 +339,16 @@ def test_dask_local_cluster_gives_the_same_csvs(work):
     for name in ("a.lptrack.csv", "b.lptrack.csv"):
         assert (work / "local" / name).read_bytes() == (work / "dask" / name).read_bytes()
     assert [o.status for o in summary.outcomes] == ["ok", "ok", "failed"]
+
+
+def test_malformed_scheduler_address_is_one_line_and_ends_at_once(work):
+    # In a process of its own: the 30 s hang was in a half-made Dask Client's __del__ at interpreter exit.
+    pytest.importorskip("dask.distributed")
+    proc = subprocess.run([*LPTRACK, "run", "footage/day1/a.mp4", "--roi", "80,60,20", "--no-video",
+                           "--scheduler", "nonsense"], capture_output=True, text=True, timeout=20)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr == ("lptrack: error: --scheduler 'nonsense' is not a Dask scheduler address (missing port "
+                           "number in address 'nonsense'); give one like tcp://10.0.0.5:8786\n")
 
 
 def test_scheduler_without_dask_gives_a_hint(work, monkeypatch):
@@ -416,6 +493,41 @@ def test_reader_of_stdout_leaving_stops_the_run_quietly(long_footage, tmp_path):
     assert process.wait(timeout=60) == 141, err
     assert err == ""
     assert files_under(tmp_path) == []
+
+
+def test_reader_of_a_batch_stream_leaving_stops_the_batch_quietly(long_footage, tmp_path):
+    # `lptrack run folder --csv - | head -2`: 141 and no message, as with one video; and no more work once the
+    # reader is gone: the second video is not finished for rows no one reads, and leaves nothing half-written.
+    out = tmp_path / "out"
+    process = subprocess.Popen([*LPTRACK, "run", str(long_footage), "--tracker", "spatial", "--csv", "-",
+                                "--out-dir", str(out), "--jobs", "1"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    assert process.stdout.readline().startswith("video,frame,time_s,")
+    assert process.stdout.readline().startswith(f"{long_footage / 'v0.mp4'},0,")
+    process.stdout.close()
+    err = process.stderr.read()
+    assert process.wait(timeout=60) == 141, err
+    assert err == ""
+    assert files_under(out) == ["v0.lptrack.mp4"]
+
+
+def test_a_worker_stopped_as_it_starts_reports_interrupted(monkeypatch):
+    # The parent's SIGTERM (Ctrl-C, the reader of --csv - gone) can land in a worker's set-up, before its task:
+    # reported as interrupted, not a traceback from multiprocessing.
+    from logpolar_track import executor
+
+    def interrupted() -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(executor, "keep_frames_off_the_heap", interrupted)
+    receiver, sender = multiprocessing.Pipe(duplex=False)
+    handlers = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        executor._worker_main(sender, len, "abc")
+    finally:
+        for signum, handler in handlers.items():  # the worker's own, set in this process
+            signal.signal(signum, handler)
+    assert receiver.recv() == ("error", "interrupted")
 
 
 def test_killed_worker_costs_only_its_video(long_footage, tmp_path):

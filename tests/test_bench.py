@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import pickle
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import cv2
@@ -216,3 +221,42 @@ def test_plot(dataset, tmp_path):
         return
     assert res.exit_code == 0, res.stderr
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_videos"
+
+
+def _children(pid: int) -> list[int]:
+    try:
+        return [int(c) for c in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
+    except OSError:
+        return []
+
+
+@pytest.mark.skipif(not Path(f"/proc/{os.getpid()}/task/{os.getpid()}/children").exists(),
+                    reason="needs Linux's /proc/PID/task/PID/children")
+@pytest.mark.skipif(not (SAMPLES / "spin.gt.csv").exists(), reason="needs the checkout's sample_videos/")
+def test_ctrl_c_to_a_parallel_bench_is_one_line():
+    # A terminal's Ctrl-C goes to the whole process group, workers included, while they read frames; the parent
+    # then stops them too. Once the workers run, that gave "Exception ignored in: <generator ...>" tracebacks.
+    # (SIGINT restored to its default in the child's Python: a background job inherits it ignored.)
+    restore_sigint = ("import runpy, signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+                      "sys.argv[0] = 'lptrack'; runpy.run_module('logpolar_track', run_name='__main__')")
+    process = subprocess.Popen([sys.executable, "-c", restore_sigint, "bench", "--dataset", str(SAMPLES),
+                                "--trackers", "spatial", "--jobs", "2", "-q"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 60
+        # The workers are children of multiprocessing's fork server, a child of lptrack.
+        while sum(len(_children(c)) for c in _children(process.pid)) < 2:
+            assert process.poll() is None and time.monotonic() < deadline, "the workers never started"
+            time.sleep(0.02)
+        time.sleep(1.0)  # into their frame loops
+        os.killpg(process.pid, signal.SIGINT)
+        out, err = process.communicate(timeout=30)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+    assert process.returncode == 130, err
+    assert err == "lptrack: interrupted\n" and out == ""

@@ -23,7 +23,7 @@ from click.testing import CliRunner
 from conftest import count_frames
 from logpolar_track import pipeline
 from logpolar_track.cli import main
-from logpolar_track.errors import RoiError
+from logpolar_track.errors import LptrackError, RoiError
 from logpolar_track.geometry import Ellipse
 from logpolar_track.pipeline import read_roi_sidecar, run_video, track_video
 from logpolar_track.results import COLUMNS
@@ -290,6 +290,26 @@ def test_bad_input(tiny_video, workdir, make, args, code, fragments):
     assert listing(tiny_video.path.parent) == inputs_before
 
 
+def test_out_dir_never_silently_ignored(tiny_video, workdir):
+    # --out-dir is the folder for the outputs lptrack names (README); a path given is used as given, and said so.
+    result = invoke(tiny_video.path, "--csv", "mine.csv", "--out-dir", "out")
+    assert result.exit_code == 0, result.stderr
+    assert listing(workdir) == ["mine.csv", "out"] and listing(workdir / "out") == ["tiny.lptrack.mp4"]
+    assert result.stderr.startswith("lptrack: note: --out-dir holds the outputs lptrack names; 'mine.csv' is "
+                                    "written where named\n")
+
+
+@pytest.mark.parametrize("args", [["--csv", "mine.csv", "--no-video"], ["--csv", "-", "--out", "v.mp4"],
+                                  ["--csv", "mine.csv", "--out", "v.mp4"]])
+def test_out_dir_left_no_output_is_an_error(tiny_video, workdir, args):
+    result = invoke(tiny_video.path, *args, "--out-dir", "out")
+    assert result.exit_code == 2
+    assert result.stdout == "" and listing(workdir) == []
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("lptrack: error: --out-dir would hold nothing: it is the folder "
+                                                   "for the outputs lptrack names, and --csv "), result.stderr
+
+
 def test_no_roi_and_no_sidecar(tiny_video, workdir):
     tiny_video.path.with_suffix(".roi").unlink()
     result = invoke(tiny_video.path)
@@ -382,6 +402,39 @@ def test_console_script_csv_dash_is_clean(tiny_video, workdir):
     assert listing(workdir) == []
 
 
+def test_ctrl_c_while_the_console_script_imports_is_quiet(tmp_path):
+    # Ctrl-C in the first few tenths of a second lands in the imports of numpy and OpenCV. Made certain here: the
+    # import of numpy is interrupted. Exit 130 with the one line, not a KeyboardInterrupt traceback.
+    script = shutil.which("lptrack", path=str(Path(sys.executable).parent)) or shutil.which("lptrack")
+    if script is None:
+        pytest.skip("the lptrack console script is not installed (pip install -e .)")
+    code = ("import runpy, sys\n"
+            "class Interrupt:\n"
+            "    @staticmethod\n"
+            "    def find_spec(name, path=None, target=None):\n"
+            "        if name == 'numpy':\n"
+            "            raise KeyboardInterrupt\n"
+            "sys.meta_path.insert(0, Interrupt)\n"
+            f"sys.argv = [{script!r}, 'run', 'clip.mp4', '--roi', '80,60,20']\n"
+            f"runpy.run_path({script!r}, run_name='__main__')\n")
+    env = {k: v for k, v in os.environ.items() if k != "LPTRACK_DEBUG"}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, cwd=tmp_path,
+                          env=env)
+    assert proc.returncode == 130, proc.stderr
+    assert proc.stderr == "lptrack: interrupted\n"
+
+
+def test_unknown_command_is_one_house_line():
+    result = CliRunner().invoke(main, ["foo"])
+    assert result.exit_code == 2
+    assert result.stderr == ("lptrack: error: no command 'foo'; the commands are "
+                             f"{', '.join(main.list_commands(None))} (see 'lptrack --help')\n")
+    assert "run" in main.list_commands(None) and "bench" in main.list_commands(None)
+    result = CliRunner().invoke(main, ["--bogus"])
+    assert result.exit_code == 2
+    assert result.stderr == "lptrack: error: No such option '--bogus'. (see 'lptrack --help')\n"
+
+
 def test_cli_keeps_opencv_warnings_off_stderr():
     # One warning per frame when a disk fills up would bury lptrack's own message; the package imports cv2
     # before the CLI module runs, so the level must be set through OpenCV's API.
@@ -458,3 +511,7 @@ def test_roi_sidecar_comments_and_ambiguities(tmp_path):
     (tmp_path / "clip.roi").write_text("# nothing yet\n")
     with pytest.raises(RoiError, match="clip.roi' is empty"):
         read_roi_sidecar(video)
+    (tmp_path / "clip.roi").write_bytes(b"\xff\xfe\x00garbage")  # unreadable input (exit 1), not a bad ROI (2)
+    with pytest.raises(LptrackError, match="cannot read ROI file") as info:
+        read_roi_sidecar(video)
+    assert info.value.exit_code == 1

@@ -69,6 +69,23 @@ if not _USER_LOG_LEVEL:
 class LptrackGroup(click.Group):
     """Click group that turns lptrack's exceptions into one line on stderr and an exit code."""
 
+    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+        # `lptrack --bogus`: parsed before invoke() below, so the one line is written here.
+        try:
+            return super().parse_args(ctx, args)
+        except click.exceptions.NoArgsIsHelpError:
+            raise  # plain `lptrack` shows the help
+        except click.UsageError as exc:
+            click.echo(f"lptrack: error: {exc.format_message()} (see 'lptrack --help')", err=True)
+            ctx.exit(EXIT_USAGE)
+
+    def resolve_command(self, ctx: click.Context, args: list[str]):
+        try:
+            return super().resolve_command(ctx, args)
+        except click.UsageError:
+            raise UsageError(f"no command '{args[0]}'; the commands are {', '.join(self.list_commands(ctx))} "
+                             f"(see 'lptrack --help')") from None
+
     def invoke(self, ctx: click.Context):
         # Handlers can only be set from the main thread (a test runner may invoke from another).
         main_thread = threading.current_thread() is threading.main_thread()

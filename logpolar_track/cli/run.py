@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import select
 import sys
 import textwrap
 import time
@@ -16,8 +17,8 @@ from pathlib import Path
 
 import click
 
-from ..batch import (BatchSummary, VideoOutcome, find_videos, outputs_complete, plan_batch, read_roi_file,
-                     run_batch)
+from ..batch import (VIDEO_EXTENSIONS, BatchSummary, VideoOutcome, find_videos, outputs_complete, plan_batch,
+                     read_roi_file, run_batch)
 from ..errors import OutputError, UsageError
 from ..executor import default_jobs
 from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, default_outputs, roi_sidecar_paths,
@@ -112,7 +113,7 @@ Examples:
 @click.option("--roi", "roi_spec", metavar="SPEC",
               help="Object on the start frame: 'cx,cy,r' or 'cx,cy,a,b,angle' (pixels; degrees CCW). "
                    "Default: the video's .roi sidecar.")
-@click.option("--roi-file", type=click.Path(dir_okay=False, path_type=Path), metavar="CSV",
+@click.option("--roi-file", type=click.Path(path_type=Path), metavar="CSV",
               help="ROIs per video: lines 'video,roi[,start_frame][,tracker]' (paths relative to the file). "
                    "With no VIDEO, its videos are the inputs.")
 @click.option("--tracker", type=TrackerChoice(), default=DEFAULT_TRACKER, show_default=True, metavar="NAME",
@@ -128,8 +129,8 @@ Examples:
               help=f"Per-frame CSV to write (one input only), or '-' for stdout (then nothing else goes to "
                    f"stdout). Default: <video stem>{CSV_OUT_SUFFIX}.")
 @click.option("--out-dir", type=click.Path(path_type=Path), metavar="DIR",
-              help="Folder for the outputs (created if needed), mirroring the inputs' folders. "
-                   "Default: the current folder.")
+              help="Folder for the outputs lptrack names (created if needed), mirroring the inputs' folders; "
+                   "--out and --csv paths are used as given. Default: the current folder.")
 @click.option("--format", "data_format", type=click.Choice(tuple(FORMATS)), default=None,
               help="Per-frame data as CSV or JSON lines. Default: from the --csv file's extension (.jsonl: JSON "
                    "lines), else CSV.")
@@ -170,6 +171,7 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     single = (len(videos) == 1 and videos[0] != "-" and not Path(videos[0]).is_dir() and roi_file is None
               and scheduler is None)
     if single:
+        _check_out_dir(out_dir, video_out=video_out, csv_out=csv_out, no_video=no_video, quiet=quiet)
         _run_one(Path(videos[0]), roi, tracker=tracker, start_frame=start_frame, max_frames=max_frames,
                  video_out=video_out, csv_out=csv_out, out_dir=out_dir, data_format=data_format,
                  no_video=no_video, overwrite=overwrite, skip_existing=skip_existing, quiet=quiet)
@@ -180,15 +182,27 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     if csv_out not in (None, "-"):
         raise UsageError(f"--csv names one video's output in this process; {many} give --out-dir DIR, "
                          f"or --csv - for one stream with a 'video' column")
+    _check_out_dir(out_dir, video_out=None, csv_out=csv_out, no_video=no_video, quiet=quiet)
     stream = csv_out == "-"
     if stream and sys.stdout is None:
         raise OutputError("cannot write the rows to stdout: it is closed")
     if stream and skip_existing:
         raise UsageError("--skip-existing needs outputs in files; it cannot apply to --csv -")
     entries = read_roi_file(roi_file) if roi_file is not None else []
-    inputs = find_videos(videos)
-    if videos and not inputs:  # without VIDEO arguments the ROI file's videos are the inputs
-        raise UsageError(f"no videos found in {', '.join(repr(v) for v in videos)}")
+    if not videos and not entries:  # without VIDEO arguments the ROI file's videos are the inputs
+        raise UsageError(f"no videos found in ROI file '{roi_file}': write one line per video, "
+                         f"video,roi[,start_frame][,tracker]")
+
+    def named_again(path: Path) -> None:
+        if not quiet:
+            click.echo(f"lptrack: note: '{path}' is named more than once; tracked once", err=True)
+
+    inputs = find_videos(videos, on_duplicate=named_again)
+    if videos and not inputs:
+        searched = any(v != "-" and Path(v).is_dir() for v in videos)
+        raise UsageError(f"no videos found in {', '.join(repr(v) for v in videos)}" +
+                         (f" (folders are searched for {', '.join(VIDEO_EXTENSIONS[:5])}, ... files)" if searched
+                          else ""))
     plan = plan_batch(inputs, roi=roi, roi_entries=entries, tracker=tracker, start_frame=start_frame,
                       max_frames=max_frames, out_dir=out_dir or ".", video=not no_video, stream=stream,
                       data_format=data_format, overwrite=overwrite, skip_existing=skip_existing)
@@ -201,6 +215,38 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
         remove_empty_folders(created)
     if summary.failed:
         sys.exit(EXIT_FAILURE)
+
+
+def _check_out_dir(out_dir: Path | None, *, video_out: Path | None, csv_out: str | None, no_video: bool,
+                   quiet: bool) -> None:
+    """``--out-dir`` holds the outputs lptrack names; outputs named on the command line go where named (as in
+    FFmpeg). Never silently: an --out-dir left nothing is an error, one left some outputs is noted."""
+    if out_dir is None:
+        return
+    video_named = "--no-video" if no_video else (f"--out {video_out}" if video_out is not None else None)
+    csv_named = None if csv_out is None else f"--csv {csv_out}"
+    if video_named and csv_named:
+        raise UsageError(f"--out-dir would hold nothing: it is the folder for the outputs lptrack names, and "
+                         f"{csv_named} and {video_named} leave it none; drop --out-dir, or put the folder in "
+                         f"the names")
+    named = [str(p) for p in (video_out, csv_out) if p is not None and str(p) != "-"]
+    if named and not quiet:
+        click.echo(f"lptrack: note: --out-dir holds the outputs lptrack names; '{named[0]}' is written where "
+                   f"named", err=True)
+
+
+def _reader_left(stream) -> bool:
+    """Whether the reader of ``stream``, a pipe (``| head``), has gone: seen without writing, so that a batch
+    stops when it happens rather than when the next video's rows are ready."""
+    if stream is None or not hasattr(select, "poll"):
+        return False
+    try:
+        fd = stream.fileno()
+    except (AttributeError, OSError, ValueError):  # not a file (a test runner's buffer)
+        return False
+    poller = select.poll()
+    poller.register(fd, 0)  # no event asked for: POLLERR (a pipe without reader) and POLLHUP come anyway
+    return any(events & (select.POLLERR | select.POLLHUP) for _, events in poller.poll(0))
 
 
 def _stdout_closed() -> None:
@@ -245,6 +291,8 @@ def _run_one_into(video: Path, roi, *, tracker: str, start_frame: int, max_frame
                             progress=show and sys.stderr.isatty(), csv_options={"data_format": data_format})
     except BrokenPipeError:
         _stdout_closed()
+    if csv_out == "-" and _reader_left(sys.stdout):
+        _stdout_closed()  # `| head` left after the last rows went into the pipe: as if their write had failed
     if not show:
         return
     if roi is None and start_frame > 0 and any(p.is_file() for p in roi_sidecar_paths(video)):
@@ -293,21 +341,29 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
         bar.set_postfix_str(f"ok {counts['ok']}, failed {counts['failed']}, "
                             f"{frames_done[0] / elapsed:.0f} frames/s", refresh=True)
 
+    def stop_if_reader_left() -> None:
+        # No more work for rows no one reads: SystemExit stops the workers and removes their temporary files.
+        if stream and _reader_left(sys.stdout):
+            _stdout_closed()
+
     def on_outcome(outcome: VideoOutcome) -> None:
         counts[outcome.status] += 1
         if bar is not None:
             bar.update(1)
             show()
+        stop_if_reader_left()
 
     def on_frames(total: int) -> None:
         frames_done[0] = total
         if bar is not None:
             show()
+        stop_if_reader_left()
 
     try:
         with stdout_errors() if stream else contextlib.nullcontext():
             summary = run_batch(plan, jobs=jobs, scheduler=scheduler, stream=sys.stdout if stream else None,
                                 data_format=data_format, on_outcome=on_outcome, on_frames=on_frames)
+        stop_if_reader_left()
     except BrokenPipeError:
         _stdout_closed()
     finally:

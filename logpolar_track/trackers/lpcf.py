@@ -335,8 +335,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         predicted = Similarity(last.cx + self.velocity[0], last.cy + self.velocity[1], last.scale,
                                last.rotation_deg, last.score)
         moved, psr, peak = self._translate(frame, predicted)
+        here = moved
         if self.misses >= self.redetect_after:
             moved, psr, peak = self._redetect(frame, predicted, moved, psr, peak)
+        found_elsewhere = moved is not here
         # Iterate to agreement: each scale/rotation estimate is made at a better centre, and the residual
         # change shrinks, which matters because windowed phase correlation under-reads large shifts.
         # Agreement ends the iterations early: when the last correlation barely moved the centre and the new
@@ -401,12 +403,19 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self.misses += 1
             self.velocity[:] = 0.0
             return refined
+        # Alpha-beta velocity: the correction from the prediction feeds the velocity, which decays, so a
+        # stationary response on featureless ground cannot carry the estimate away. A place found by the
+        # whole-frame search was reached over all the frames since the last good one: the mean motion since then
+        # is the velocity (the correction from the stale prediction would count the whole jump as one frame's).
+        if found_elsewhere:
+            gap = self.misses + 1
+            self.velocity = self.velocity_damping * np.array([refined.cx - self._last_good.cx,
+                                                              refined.cy - self._last_good.cy]) / gap
+        else:
+            correction = np.array([refined.cx - predicted.cx, refined.cy - predicted.cy])
+            self.velocity = self.velocity_damping * (self.velocity + correction)
         self.misses = 0
         self._last_good = refined
-        # Alpha-beta velocity: the correction from the prediction feeds the velocity, which decays, so a
-        # stationary response on featureless ground cannot carry the estimate away.
-        correction = np.array([refined.cx - predicted.cx, refined.cy - predicted.cy])
-        self.velocity = self.velocity_damping * (self.velocity + correction)
         reach = 0.5 * max(self.size) * self.step * refined.scale / (1 + self.padding)
         speed = float(np.hypot(*self.velocity))
         if speed > reach:
@@ -1088,7 +1097,10 @@ def _rotate_screen(vector: np.ndarray, angle_deg: float) -> np.ndarray:
 
 
 def _peak_and_psr(response: np.ndarray, exclude: int = 5) -> tuple[float, float, float, float]:
-    """Signed sub-sample peak position ``(dy, dx)``, peak value and peak-to-sidelobe ratio of a response."""
+    """Signed sub-sample peak position ``(dy, dx)``, peak value and peak-to-sidelobe ratio of a response.
+
+    The sidelobe is the response outside ``2 exclude + 1`` samples around the peak along each axis, or fewer along
+    an axis too short for that (a thin object's patch: 10 samples across), so that two rows or columns remain."""
     ny, nx = response.shape
     r, c = divmod(int(response.argmax()), nx)
     peak = float(response[r, c])
@@ -1096,13 +1108,15 @@ def _peak_and_psr(response: np.ndarray, exclude: int = 5) -> tuple[float, float,
     dc = _log_parabola(float(response[r, c - 1]), peak, float(response[r, (c + 1) % nx]))
     dy = (r + dr + ny / 2) % ny - ny / 2
     dx = (c + dc + nx / 2) % nx - nx / 2
-    if 2 * exclude + 1 > min(ny, nx):
+    # Without a sidelobe left the ratio was NaN, and a thin object's filter never learnt nor re-detected it.
+    exclude_y, exclude_x = min(exclude, (ny - 3) // 2), min(exclude, (nx - 3) // 2)
+    if min(exclude_y, exclude_x) < 0:
         return dy, dx, peak, float("nan")
-    # Mean and spread of the response outside the (2 exclude + 1)^2 block around the peak (wrapping around),
-    # from sums over the whole response minus the block's, in float64.
+    # Mean and spread of the response outside the block around the peak (wrapping around), from sums over the
+    # whole response minus the block's, in float64.
     values = response.astype(np.float64)
-    span = np.arange(-exclude, exclude + 1)
-    block = values.take(r + span, axis=0, mode="wrap").take(c + span, axis=1, mode="wrap").ravel()
+    block = (values.take(r + np.arange(-exclude_y, exclude_y + 1), axis=0, mode="wrap")
+             .take(c + np.arange(-exclude_x, exclude_x + 1), axis=1, mode="wrap").ravel())
     count = values.size - block.size
     flat = values.ravel()
     mean = (flat.sum() - block.sum()) / count

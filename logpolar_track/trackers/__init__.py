@@ -12,7 +12,7 @@ from . import opencv  # noqa: F401  (registers the OpenCV peers cv-mil, cv-kcf, 
 
 #: The tracker ``lptrack run`` uses when none is named: the best measured on sample_videos/ (mean IoU AUC 0.952 against
 #: 0.819 for the best thesis tracker) and on the real sequences (0.525 against 0.327 for the best thesis tracker,
-#: spatial; CSRT 0.401).
+#: spatial; CSRT 0.402).
 DEFAULT_TRACKER = "lpcf"
 
 __all__ = ["DEFAULT_TRACKER", "Tracker", "TrackState", "Similarity", "SimilarityTracker", "create_tracker", "register",

@@ -11,7 +11,7 @@ from . import lpcf  # noqa: F401  (registers lpcf, the default, and lpcf-masked)
 from . import opencv  # noqa: F401  (registers the OpenCV peers cv-mil, cv-kcf, cv-csrt)
 
 #: The tracker ``lptrack run`` uses when none is named: the best measured on sample_videos/ (mean IoU AUC 0.952 against
-#: 0.819 for the best thesis tracker) and on the real sequences (0.525 against 0.327 for the best thesis tracker,
+#: 0.819 for the best thesis tracker) and on the real sequences (0.527 against 0.327 for the best thesis tracker,
 #: spatial; CSRT 0.402).
 DEFAULT_TRACKER = "lpcf"
 

@@ -485,19 +485,25 @@ def _float(text) -> float:
     return float(text)
 
 
-def _read_csv_columns(path, required: tuple[str, ...], what: str) -> tuple[list[dict], list[str]]:
-    """Rows (as ``{column: text}``) and header of a CSV file, or of JSON lines as ``lptrack run`` writes them
-    (:func:`~logpolar_track.results.read_data_rows`), with the ``required`` columns."""
+def read_data_file(path, what: str, hint: str = "") -> tuple[list[str], list[tuple[int, list[str]]]]:
+    """:func:`~logpolar_track.results.read_data_rows` (a CSV file, or JSON lines as ``lptrack run`` writes them),
+    its failures raised as :class:`GroundTruthError` naming ``what`` the file is, and ``hint`` on a bad line."""
     from .results import read_data_rows  # here, not at the top: results imports the trackers (OpenCV)
 
-    path = Path(path)
     try:
-        header, body = read_data_rows(path)
+        return read_data_rows(path)
     except (OSError, UnicodeDecodeError) as exc:
         why = exc.strerror if isinstance(exc, OSError) and exc.strerror else "not a text file"
         raise GroundTruthError(f"cannot read {what} '{path}': {why}") from None
     except ValueError as exc:
-        raise GroundTruthError(f"{what} '{path}': {exc}") from None
+        raise GroundTruthError(f"{what} '{path}': {exc}" + (f"; {hint}" if hint else "")) from None
+
+
+def _read_csv_columns(path, required: tuple[str, ...], what: str) -> tuple[list[dict], list[str]]:
+    """Rows (as ``{column: text}``) and header of a data file (:func:`read_data_file`) with the ``required``
+    columns."""
+    path = Path(path)
+    header, body = read_data_file(path, what)
     missing = [c for c in required if c not in header]
     if missing:
         raise GroundTruthError(f"{what} '{path}' lacks column(s) {', '.join(missing)}; expected a header "

@@ -36,9 +36,10 @@ import numpy as np
 
 from .draw import LOST_COLOUR, TRACKED_COLOUR, draw_state
 from .errors import FrameRangeError, OutputError, RoiError, UsageError, VideoError
-from .evaluate import GroundTruthError, Track, read_ground_truth, rotation_errors, scale_errors, score_track
+from .evaluate import (GroundTruthError, Track, read_data_file, read_ground_truth, rotation_errors, scale_errors,
+                       score_track)
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
-from .results import COLUMNS, STATUSES, FrameResult, read_data_rows
+from .results import COLUMNS, STATUSES, FrameResult
 from .trackers.base import TrackState
 from .video import VideoReader, check_output_path, temporary_path
 
@@ -539,13 +540,7 @@ def read_run_csv(path) -> RunTable:
     path = Path(path)
     expected = ",".join(COLUMNS)
     hint = f"expected an lptrack run CSV with the header {expected}, or its JSON lines"
-    try:
-        header, body = read_data_rows(path)
-    except (OSError, UnicodeDecodeError) as exc:
-        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else "not a text file"
-        raise GroundTruthError(f"cannot read run CSV '{path}': {why}") from None
-    except ValueError as exc:
-        raise GroundTruthError(f"run data '{path}': {exc}; {hint}") from None
+    header, body = read_data_file(path, "run CSV", hint)
     if not header:
         raise GroundTruthError(f"run CSV '{path}' is empty; {hint}")
     if tuple(header[:len(COLUMNS)]) != COLUMNS:

@@ -4,10 +4,10 @@ scale and rotation, each run in the frame of the other's estimate.
 Per frame:
 
 1. **Predict** the centre with a damped constant-velocity model, so fast motion stays inside the search patch.
-2. **Translate**: sample a patch around the prediction in the object's own frame (turned by the current
-   rotation, scaled by the current scale; ``padding`` times the object's size around it), compute grey and
-   oriented-gradient features, and correlate them with a multi-channel discriminative correlation filter
-   (MOSSE/DSST closed form). The response peak, refined to sub-sample precision, gives the displacement.
+2. **Translate**: sample a patch around the prediction in the object's own frame (along the ROI ellipse's axes
+   turned by the current rotation, scaled by the current scale; ``padding`` times the object's size around it),
+   compute grey and oriented-gradient features, and correlate them with a multi-channel discriminative
+   correlation filter (MOSSE/DSST closed form). The response peak, refined to sub-sample precision, gives the displacement.
 3. **Scale and rotate**: sample a log-polar image over the object's ellipse, enlarged 1.6 times to take in its
    outline, at the new centre and phase-correlate it with the log-polar appearance model: the peak's shift
    gives the change of scale and rotation, shrunk by a motion prior unless the match is near-perfect.
@@ -1047,11 +1047,6 @@ _SLACK_FRACTION = 0.05
 #: Agreement of two estimates within a frame: change of scale (natural log), of angle (degrees) and centre
 #: motion (samples) small enough for a further correlation to be skipped.
 _AGREED_LOG_SCALE, _AGREED_DEGREES, _AGREED_SAMPLES = 0.005, 0.5, 0.2
-#: How far the final estimate may be from the last correlated patch -- samples off its centre, change of scale
-#: (natural log), of angle (degrees) -- for that patch to be learnt from. With the gradient refinement the last
-#: correlation comes before both log-polar matches, so scale and angle differ by about one frame's change:
-#: resampling (0.5 % and 0.5 degrees, as before the refinement) cost 0.15 ms a frame, and the 7 real
-#: sequences' 10-start mean IoU AUC was 0.469 with it, 0.464 without (within noise).
 #: Ellipses thinner than this (minor over major semi-axis) are matched in log-polar on the circle of their longer
 #: semi-axis. A textured 80 x 12 px ellipse (aspect 0.15) drifting 3 px and turning 0.5 degrees a frame: 4 of 4
 #: seeds tracked on every frame, median rotation error 0.6-1.2 degrees, against 8-70 % of the frames and 10-54
@@ -1059,7 +1054,11 @@ _AGREED_LOG_SCALE, _AGREED_DEGREES, _AGREED_SAMPLES = 0.005, 0.5, 0.2
 #: ROI, crossing's pedestrian (aspect 0.34) fell from 0.741 to 0.659 (10-start mean IoU AUC), the 7 real sequences
 #: from 0.470 to 0.437. None of the real sequences is thinner than 0.34, so they are unchanged.
 _ROUND_GRID_ASPECT = 0.25
-
+#: How far the final estimate may be from the last correlated patch -- samples off its centre, change of scale
+#: (natural log), of angle (degrees) -- for that patch to be learnt from. With the gradient refinement the last
+#: correlation comes before both log-polar matches, so scale and angle differ by about one frame's change:
+#: resampling (0.5 % and 0.5 degrees, as before the refinement) cost 0.15 ms a frame, and the 7 real
+#: sequences' 10-start mean IoU AUC was 0.469 with it, 0.464 without (within noise).
 _REUSE_OFF_CENTRE = 0.25
 _REUSE_LOG_SCALE, _REUSE_DEGREES = 0.02, 2.0
 #: Occlusion mask (``occlusion_mask``, see ``_update_mask``): blocks (rings, sectors) of the log-polar image;

@@ -5,6 +5,11 @@ Messages say what was expected, what was received and how to fix it.
 """
 
 
+def counted(n: int, noun: str) -> str:
+    """``n`` and ``noun``, plural unless ``n`` is 1 (``"1 frame"``, ``"20 frames"``), for messages."""
+    return f"{n} {noun}" + ("" if n == 1 else "s")
+
+
 class LptrackError(Exception):
     """Base class of every error lptrack raises on purpose."""
 

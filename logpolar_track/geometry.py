@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import RoiError
+from .errors import RoiError, counted
 
 ROI_SYNTAX = "'cx,cy,r' (circle) or 'cx,cy,a,b,angle' (ellipse; pixels, angle in degrees counter-clockwise)"
 
@@ -164,8 +164,7 @@ def parse_roi(spec: str) -> Ellipse:
     except ValueError:
         raise RoiError(f"ROI '{spec}' is not a list of numbers; expected {ROI_SYNTAX}") from None
     if len(values) not in (3, 5):
-        count = f"{len(values)} number" + ("" if len(values) == 1 else "s")
-        raise RoiError(f"ROI '{spec}' has {count}; expected {ROI_SYNTAX}")
+        raise RoiError(f"ROI '{spec}' has {counted(len(values), 'number')}; expected {ROI_SYNTAX}")
     if not all(math.isfinite(v) for v in values):
         raise RoiError(f"ROI '{spec}' contains a non-finite number; expected {ROI_SYNTAX}")
     if len(values) == 3:

@@ -35,7 +35,7 @@ import cv2
 import numpy as np
 
 from .draw import LOST_COLOUR, TRACKED_COLOUR, draw_state
-from .errors import FrameRangeError, OutputError, RoiError, UsageError, VideoError
+from .errors import FrameRangeError, OutputError, RoiError, UsageError, VideoError, counted
 from .evaluate import (GroundTruthError, Track, read_data_file, read_ground_truth, rotation_errors, scale_errors,
                        score_track)
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
@@ -159,9 +159,8 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None) -
             # Within the last frame's time on screen, rounded up past it: that frame is the one shown.
             return read_frame(path, n - 1)
         asked = f"frame {index}" if time_s is None else f"time {time_s:g} s (frame {index} at {fps:g} fps)"
-        frames = f"{n} frame" + ("" if n == 1 else "s")
-        raise FrameRangeError(f"{asked} lies past the end of '{path}', which has {frames}: give a frame from "
-                              f"0 to {n - 1} (or a time before {n / fps:.3f} s)") from None
+        raise FrameRangeError(f"{asked} lies past the end of '{path}', which has {counted(n, 'frame')}: give a "
+                              f"frame from 0 to {n - 1} (or a time before {n / fps:.3f} s)") from None
     with reader:
         return Frame(reader.first_frame.copy(), index, reader.time_of(index), reader.fps, reader.fps_guessed,
                      path)
@@ -373,9 +372,8 @@ def roi_from_box(box, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
     """
     values = _parse_numbers(box, "box") if isinstance(box, str) else [float(v) for v in box]
     if len(values) != 4:
-        count = f"{len(values)} number" + ("" if len(values) == 1 else "s")
-        raise RoiError(f"box '{box}' has {count}; expected x,y,w,h (top-left corner and size "
-                       f"in pixels)")
+        raise RoiError(f"box '{box}' has {counted(len(values), 'number')}; expected x,y,w,h (top-left corner and "
+                       f"size in pixels)")
     x, y, w, h = values
     if w <= 0 or h <= 0:
         raise RoiError(f"box '{box}': width and height must be > 0 pixels")

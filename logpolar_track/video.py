@@ -30,7 +30,7 @@ from typing import Iterator  # noqa: E402
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .errors import FrameRangeError, OutputError, VideoError  # noqa: E402
+from .errors import FrameRangeError, OutputError, VideoError, counted  # noqa: E402
 
 #: Frame rate assumed when a container reports none (0 or NaN), in frames per second.
 FALLBACK_FPS = 25.0
@@ -244,10 +244,9 @@ class VideoReader:
 
 
 def _past_the_end(start_frame: int, path: Path, n_frames: int) -> FrameRangeError:
-    frames = f"{n_frames} frame" + ("" if n_frames == 1 else "s")
     valid = "0" if n_frames == 1 else f"from 0 to {n_frames - 1}"
-    return FrameRangeError(f"start frame {start_frame} lies past the end of '{path}', which has {frames}; give a "
-                           f"start frame {valid}")
+    return FrameRangeError(f"start frame {start_frame} lies past the end of '{path}', which has "
+                           f"{counted(n_frames, 'frame')}; give a start frame {valid}")
 
 
 def keep_frames_off_the_heap(threshold_bytes: int = 10 << 20) -> None:

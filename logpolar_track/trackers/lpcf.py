@@ -7,7 +7,8 @@ Per frame:
 2. **Translate**: sample a patch around the prediction in the object's own frame (along the ROI ellipse's axes
    turned by the current rotation, scaled by the current scale; ``padding`` times the object's size around it),
    compute grey and oriented-gradient features, and correlate them with a multi-channel discriminative
-   correlation filter (MOSSE/DSST closed form). The response peak, refined to sub-sample precision, gives the displacement.
+   correlation filter (MOSSE/DSST closed form). The response peak, refined to sub-sample precision, gives the
+   displacement.
 3. **Scale and rotate**: sample a log-polar image over the object's ellipse, enlarged 1.6 times to take in its
    outline, at the new centre and phase-correlate it with the log-polar appearance model: the peak's shift
    gives the change of scale and rotation, shrunk by a motion prior unless the match is near-perfect.

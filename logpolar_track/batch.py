@@ -23,10 +23,11 @@ import io
 import json
 import os
 import sys
+import threading
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import IO, Callable, Iterable
+from typing import IO, Callable, Iterable, Sequence
 
 from .errors import LptrackError, RoiError, UsageError
 from .executor import TaskOutcome, run_tasks
@@ -489,10 +490,143 @@ def remove_temporary_outputs(job: VideoJob, pid: int) -> None:
             temporary_path(candidate, pid=pid).unlink(missing_ok=True)
 
 
+def announced_job_frames(job: VideoJob) -> int | None:
+    """Frames ``job`` will track as its video's container announces them: from its start frame to the end, at
+    most ``max_frames``; ``max_frames`` itself when the container does not say; None when neither is known.
+
+    Opens the video's container without decoding (about a millisecond for a local file); may be approximate
+    for containers that store only a duration (.mkv, .webm).
+    """
+    announced = announced_frame_count(job.video)
+    if not announced:
+        return job.max_frames
+    remaining = max(announced - job.start_frame, 0)
+    return remaining if job.max_frames is None else min(remaining, job.max_frames)
+
+
+class BatchProgress:
+    """How far a batch has got, in frames and in videos, for a progress display.
+
+    :func:`run_batch` keeps one up to date and hands it to its ``on_progress`` callback; its expected frame
+    counts are read from the videos' containers in a background thread while the batch runs.
+
+    Attributes
+    ----------
+    videos : int
+        Videos of the plan, those settled before running (skipped, output clashes) included.
+    ok, failed, skipped : int
+        Videos settled so far with each status.
+    frames_done : int
+        Frames tracked so far. A video that fails part-way keeps the frames it had tracked (so the count
+        never goes back), unlike :attr:`BatchSummary.frames`, which counts the frames of videos that succeeded.
+    """
+
+    def __init__(self, jobs: int, settled: Sequence[VideoOutcome] = ()) -> None:
+        self.videos = jobs + len(settled)
+        self.ok = self.failed = self.skipped = 0
+        self.frames_done = 0
+        self._lock = threading.Lock()
+        self._expected: list[int | None] = [None] * jobs
+        self._done = [0] * jobs
+        self._finished = [False] * jobs
+        self._finished_frames = 0
+        # Running sums, so that an update costs the same whatever the number of videos.
+        self._counted_sum = self._counted_n = 0  # every expected count known
+        self._open_counted_sum = 0               # ... of the videos not finished
+        self._open_uncounted = jobs              # videos not finished whose count is not known
+        for outcome in settled:
+            self._count(outcome.status)
+
+    @property
+    def videos_done(self) -> int:
+        """Videos settled so far: ok, failed or skipped."""
+        return self.ok + self.failed + self.skipped
+
+    @property
+    def frames_total(self) -> int | None:
+        """Frames the whole batch will have tracked, as far as known (never below :attr:`frames_done`).
+
+        A finished video counts its own frames; one still to finish, the frames its container announces
+        (:func:`announced_job_frames`); one whose count is not known (the container does not say, the video
+        is unreadable here, or its container has not been read yet), the mean of the known counts. None
+        while no count is known and some video has yet to finish. Exact once every video has finished.
+        """
+        with self._lock:
+            total = self._finished_frames + self._open_counted_sum
+            if self._open_uncounted:
+                if not self._counted_n:
+                    return None
+                total += round(self._open_uncounted * self._counted_sum / self._counted_n)
+            return max(total, self.frames_done)
+
+    def expect(self, index: int, frames: int | None) -> None:
+        """Job ``index`` is expected to track ``frames`` frames (None: not known)."""
+        if frames is None:
+            return
+        with self._lock:
+            if self._expected[index] is not None:
+                return
+            self._expected[index] = frames
+            self._counted_sum += frames
+            self._counted_n += 1
+            if not self._finished[index]:
+                self._open_counted_sum += frames
+                self._open_uncounted -= 1
+
+    def advance(self, index: int, done: int) -> None:
+        """Job ``index`` has tracked ``done`` frames so far."""
+        with self._lock:
+            if not self._finished[index] and done > self._done[index]:
+                self.frames_done += done - self._done[index]
+                self._done[index] = done
+
+    def finish(self, index: int, outcome: VideoOutcome) -> None:
+        """Job ``index`` has settled as ``outcome``."""
+        with self._lock:
+            if self._finished[index]:
+                return
+            self._finished[index] = True
+            # A completed video's own count is exact; a failed one keeps what it had tracked.
+            frames = outcome.frames if outcome.status == "ok" else self._done[index]
+            self.frames_done += frames - self._done[index]
+            self._done[index] = frames
+            self._finished_frames += frames
+            if self._expected[index] is None:
+                self._open_uncounted -= 1
+            else:
+                self._open_counted_sum -= self._expected[index]
+            self._count(outcome.status)
+
+    def _count(self, status: str) -> None:
+        self.ok += status == "ok"
+        self.failed += status == "failed"
+        self.skipped += status == "skipped"
+
+
+def _count_frames_in_background(jobs: Sequence[VideoJob], progress: BatchProgress) -> threading.Event:
+    """Read every job's announced frame count into ``progress`` in a daemon thread, in the order the jobs
+    run; set the returned event to stop it early. In the background because opening thousands of containers
+    (on a network file system, say) would otherwise hold up the start of the batch."""
+    stop = threading.Event()
+
+    def count() -> None:
+        for index, job in enumerate(jobs):
+            if stop.is_set():
+                return
+            try:
+                progress.expect(index, announced_job_frames(job))
+            except Exception:  # noqa: BLE001 - a count is only a display's estimate; the video fails on its own
+                pass
+
+    threading.Thread(target=count, name="lptrack-frame-counts", daemon=True).start()
+    return stop
+
+
 def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str] | None = None,
               data_format: str = "csv",
               on_outcome: Callable[[VideoOutcome], None] | None = None,
-              on_frames: Callable[[int], None] | None = None) -> BatchSummary:
+              on_frames: Callable[[int], None] | None = None,
+              on_progress: Callable[[BatchProgress], None] | None = None) -> BatchSummary:
     """Run a :func:`plan_batch` plan; return every video's outcome in input order.
 
     Parameters
@@ -508,6 +642,11 @@ def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str]
         Called with each video's outcome as it settles (progress display).
     on_frames : callable, optional
         Called with the total frames tracked so far, as workers report them.
+    on_progress : callable, optional
+        Called with a :class:`BatchProgress` (frames done and expected, videos done) whenever it changes:
+        as frames are tracked, in this process or in local worker processes (each reports a few times a
+        second), and as each video settles. Dask workers report nothing until their video is done, so on a
+        cluster the frames advance one finished video at a time.
     """
     started = time.perf_counter()
     outcomes = dict(plan.settled)
@@ -531,11 +670,18 @@ def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str]
             on_outcome(outcome)
     flush_stream()
     done_frames = [0] * len(plan.jobs)
+    shown = None if on_progress is None else BatchProgress(len(plan.jobs), list(plan.settled.values()))
+    stop_counting = None if shown is None else _count_frames_in_background(plan.jobs, shown)
+    if shown is not None:
+        on_progress(shown)
 
     def progress(index: int, done: int) -> None:
         done_frames[index] = done
         if on_frames is not None:
             on_frames(sum(done_frames))
+        if shown is not None:
+            shown.advance(index, done)
+            on_progress(shown)
 
     def worker_died(index: int, pid: int) -> None:
         remove_temporary_outputs(plan.jobs[index], pid)
@@ -550,8 +696,13 @@ def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str]
                 on_frames(sum(done_frames))
             if on_outcome is not None:
                 on_outcome(outcome)
+            if shown is not None:
+                shown.finish(result.index, outcome)
+                on_progress(shown)
             flush_stream()
     finally:
+        if stop_counting is not None:
+            stop_counting.set()
         # Failed and interrupted videos leave no outputs, nor folders made only for them (the others' folders
         # hold their outputs, so are not empty).
         remove_empty_folders({p for job in plan.jobs for p in plan.output_folders(job)} - existing)

@@ -20,8 +20,10 @@ import pytest
 from click.testing import CliRunner
 
 from conftest import _make_video
-from logpolar_track.batch import VideoInput, data_frame_span, find_videos, plan_batch, read_roi_file, run_batch
+from logpolar_track.batch import (BatchProgress, VideoInput, VideoOutcome, announced_job_frames, data_frame_span,
+                                  find_videos, plan_batch, read_roi_file, run_batch)
 from logpolar_track.cli import main
+from logpolar_track.cli import run as cli_run
 from logpolar_track.errors import UsageError
 from logpolar_track.executor import DASK_HINT
 from logpolar_track.geometry import Ellipse
@@ -88,6 +90,93 @@ def test_folder_with_bad_videos_completes_the_good_ones(work):
     assert re.search(r"lptrack: failed: footage/day2/notes\.mp4: cannot read .* as a video", err)
     assert f"footage/day2/cut.avi: ended after {cut_rows} of the 30 frames" in err
     assert "Traceback" not in err
+
+
+class RecordingBar:
+    """Stands in for tqdm: keeps what the batch's progress bar was told."""
+
+    made: list["RecordingBar"] = []
+
+    def __init__(self, total=None, unit="it", file=None, **options):
+        self.total, self.unit, self.file, self.n, self.steps, self.postfix = total, unit, file, 0, [], None
+        RecordingBar.made.append(self)
+
+    def update(self, n=1):
+        self.steps.append(n)
+        self.n += n
+
+    def set_postfix_str(self, text, refresh=True):
+        self.postfix = text
+
+    def refresh(self):
+        pass
+
+    def close(self):
+        pass
+
+
+@pytest.fixture
+def recorded_bars(monkeypatch) -> list[RecordingBar]:
+    """Progress bars of ``lptrack run`` as if stderr were a terminal, recorded instead of drawn."""
+    RecordingBar.made = []
+    monkeypatch.setattr(cli_run, "_stderr_is_terminal", lambda: True)
+    monkeypatch.setattr("tqdm.tqdm", RecordingBar)
+    return RecordingBar.made
+
+
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_batch_progress_bar_counts_frames_of_every_video(work, recorded_bars, jobs):
+    result = invoke("footage", "--out-dir", "out", "--no-video", "--jobs", jobs)
+    assert result.exit_code == 1
+    cut_rows = len(csv_rows(work / "out" / "day2/cut.lptrack.csv"))
+    [bar] = recorded_bars
+    assert bar.unit == "frame" and bar.file.name == "<stderr>"
+    # It ends full, in frames (the video that is not one tracked none), never having gone back.
+    assert bar.n == bar.total == 20 + 24 + 16 + cut_rows
+    assert min(bar.steps) >= 0
+    assert bar.postfix == "5/5 videos, 1 failed"
+
+
+def test_batch_progress_bar_stays_off_under_quiet(work, recorded_bars):
+    result = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1", "-q")
+    assert result.exit_code == 0 and result.stderr == ""
+    assert recorded_bars == []
+
+
+def test_batch_progress_totals_frames_and_estimates_unknown_counts():
+    progress = BatchProgress(3, [VideoOutcome("old.mp4", "skipped", "outputs exist")])
+    assert (progress.videos, progress.videos_done, progress.skipped) == (4, 1, 1)
+    assert progress.frames_total is None  # no count known yet
+    progress.expect(0, 100)
+    progress.expect(1, None)  # its container does not say: counted as the mean of the known ones
+    assert progress.frames_total == 100 + 100 + 100
+    progress.expect(2, 40)
+    assert progress.frames_total == 100 + 70 + 40
+    progress.advance(0, 30)
+    assert progress.frames_done == 30
+    progress.finish(0, VideoOutcome("a.mp4", "ok", frames=90))  # ended early: its own count replaces the container's
+    assert (progress.frames_done, progress.frames_total) == (90, 90 + 70 + 40)
+    progress.advance(1, 25)
+    progress.finish(1, VideoOutcome("b.mp4", "failed", "broken"))  # keeps the frames it had: the bar never goes back
+    assert (progress.frames_done, progress.frames_total) == (115, 90 + 25 + 40)
+    progress.advance(2, 50)  # more frames than its container announced
+    assert progress.frames_total == progress.frames_done == 165
+    progress.finish(2, VideoOutcome("c.mp4", "ok", frames=50))
+    assert (progress.frames_done, progress.frames_total) == (140 + 25, 165)
+    assert (progress.ok, progress.failed, progress.skipped, progress.videos_done) == (2, 1, 1, 4)
+
+
+def test_announced_job_frames_follow_start_frame_and_frames(work):
+    def job(path, **options):
+        [one] = plan_batch(find_videos([path]), roi=Ellipse.circle(80, 60, 20), out_dir="out", **options).jobs
+        return one
+
+    assert announced_job_frames(job("footage/day1/b.mp4")) == 24
+    assert announced_job_frames(job("footage/day1/b.mp4", start_frame=10)) == 14
+    assert announced_job_frames(job("footage/day1/b.mp4", start_frame=10, max_frames=5)) == 5
+    assert announced_job_frames(job("footage/day1/b.mp4", start_frame=30)) == 0
+    assert announced_job_frames(job("footage/day2/notes.mp4")) is None  # not a video: not known
+    assert announced_job_frames(job("footage/day2/notes.mp4", max_frames=7)) == 7
 
 
 def test_failed_video_leaves_no_folder_made_for_it(work):
@@ -334,11 +423,15 @@ def test_dask_local_cluster_gives_the_same_csvs(work):
                          cluster.scheduler_address)
         with distributed.Client(cluster) as client:  # the library takes a connected client too
             plan = plan_batch(find_videos(["footage/day2"]), out_dir="api", video=False)
-            summary = run_batch(plan, scheduler=client)
+            seen = []
+            summary = run_batch(plan, scheduler=client, on_progress=lambda p: seen.append(
+                (p.frames_done, p.frames_total, p.videos_done)))
     assert local.exit_code == on_dask.exit_code == 0, on_dask.stderr
     for name in ("a.lptrack.csv", "b.lptrack.csv"):
         assert (work / "local" / name).read_bytes() == (work / "dask" / name).read_bytes()
     assert [o.status for o in summary.outcomes] == ["ok", "ok", "failed"]
+    # Dask workers report no frames while they run: the progress moves a finished video at a time.
+    assert seen[-1] == (summary.frames, summary.frames, 3)
 
 
 def test_malformed_scheduler_address_is_one_line_and_ends_at_once(work):

@@ -12,12 +12,11 @@ import os
 import select
 import sys
 import textwrap
-import time
 from pathlib import Path
 
 import click
 
-from ..batch import (VIDEO_EXTENSIONS, BatchSummary, VideoOutcome, find_videos, outputs_complete, plan_batch,
+from ..batch import (VIDEO_EXTENSIONS, BatchProgress, BatchSummary, find_videos, outputs_complete, plan_batch,
                      read_roi_file, run_batch)
 from ..errors import OutputError, UsageError
 from ..executor import default_jobs
@@ -323,46 +322,45 @@ def _truncation(label: str, frames: int, expected: int) -> str:
             f"its outputs hold those {frames}")
 
 
+def _stderr_is_terminal() -> bool:
+    """Whether stderr is a terminal: progress bars are drawn only there."""
+    return sys.stderr.isatty()
+
+
 def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_format: str,
               quiet: bool) -> BatchSummary:
-    """A batch: progress bar of videos (ok/failed, frames/s), then the summary and every failure on stderr."""
+    """A batch: a progress bar of frames over all videos (with videos done and failed beside it), then the
+    summary and every failure on stderr."""
     bar = None
-    if not quiet and sys.stderr.isatty():
+    if not quiet and _stderr_is_terminal():
         from tqdm import tqdm
 
-        bar = tqdm(total=len(plan.order), unit="video", file=sys.stderr, dynamic_ncols=True, leave=False,
-                   desc="lptrack")
-    counts = {"ok": 0, "failed": 0, "skipped": 0}
-    started = time.perf_counter()
-    frames_done = [0]
-
-    def show() -> None:
-        elapsed = max(time.perf_counter() - started, 1e-9)
-        bar.set_postfix_str(f"ok {counts['ok']}, failed {counts['failed']}, "
-                            f"{frames_done[0] / elapsed:.0f} frames/s", refresh=True)
+        # Frames, not videos: a bar of videos stands still for minutes when there are few long ones.
+        bar = tqdm(total=None, unit="frame", file=sys.stderr, dynamic_ncols=True, leave=False, desc="lptrack")
+    videos_shown = [-1]
 
     def stop_if_reader_left() -> None:
         # No more work for rows no one reads: SystemExit stops the workers and removes their temporary files.
         if stream and _reader_left(sys.stdout):
             _stdout_closed()
 
-    def on_outcome(outcome: VideoOutcome) -> None:
-        counts[outcome.status] += 1
-        if bar is not None:
-            bar.update(1)
-            show()
-        stop_if_reader_left()
-
-    def on_frames(total: int) -> None:
-        frames_done[0] = total
-        if bar is not None:
-            show()
-        stop_if_reader_left()
+    def on_progress(progress: BatchProgress) -> None:
+        bar.total = progress.frames_total
+        if progress.videos_done != videos_shown[0]:
+            videos_shown[0] = progress.videos_done
+            failed = f", {progress.failed} failed" if progress.failed else ""
+            bar.set_postfix_str(f"{progress.videos_done}/{progress.videos} videos{failed}", refresh=False)
+            bar.update(progress.frames_done - bar.n)
+            bar.refresh()
+        else:
+            bar.update(progress.frames_done - bar.n)  # tqdm redraws at most ten times a second
 
     try:
         with stdout_errors() if stream else contextlib.nullcontext():
             summary = run_batch(plan, jobs=jobs, scheduler=scheduler, stream=sys.stdout if stream else None,
-                                data_format=data_format, on_outcome=on_outcome, on_frames=on_frames)
+                                data_format=data_format, on_outcome=lambda outcome: stop_if_reader_left(),
+                                on_frames=lambda frames: stop_if_reader_left(),
+                                on_progress=None if bar is None else on_progress)
         stop_if_reader_left()
     except BrokenPipeError:
         _stdout_closed()

@@ -799,7 +799,11 @@ def sheet_indices(n_rows: int, count: int) -> np.ndarray:
     return np.unique(np.round(np.linspace(0, n_rows - 1, count)).astype(int))
 
 
-def write_contact_sheet(video_path, run_csv_or_rows, out_png, *, cols: int = 4, rows: int = 3,
+#: Rows of a contact sheet when neither ``rows`` nor ``count`` is given.
+SHEET_ROWS = 3
+
+
+def write_contact_sheet(video_path, run_csv_or_rows, out_png, *, cols: int = 4, rows: int | None = None,
                         count: int | None = None, width: int = 1600, overwrite: bool = False) -> Path:
     """Write a contact sheet: a grid of evenly spaced annotated frames of a run, as one PNG.
 
@@ -811,8 +815,11 @@ def write_contact_sheet(video_path, run_csv_or_rows, out_png, *, cols: int = 4, 
         The run: a run CSV path (checked against the contract) or the results themselves.
     out_png : str or Path
         PNG to write (atomically).
-    cols, rows : int
-        Grid shape; ``cols * rows`` frames, evenly spaced over the run's rows, first and last included.
+    cols : int
+        Columns of tiles.
+    rows : int, optional
+        Rows of tiles: ``cols * rows`` frames, evenly spaced over the run's rows, first and last included.
+        Default :data:`SHEET_ROWS` (3), unless ``count`` is given.
     count : int, optional
         Instead of ``rows``: this many frames, in ``cols`` columns (rows as needed).
     width : int
@@ -828,7 +835,8 @@ def write_contact_sheet(video_path, run_csv_or_rows, out_png, *, cols: int = 4, 
     Raises
     ------
     UsageError
-        Bad grid shape or width, or the run's frames are not in the video.
+        Bad grid shape or width, both ``rows`` and ``count`` given (they are alternatives: either fixes the
+        number of frames), or the run's frames are not in the video.
     GroundTruthError
         The CSV does not follow the contract.
     VideoError, OutputError
@@ -839,7 +847,10 @@ def write_contact_sheet(video_path, run_csv_or_rows, out_png, *, cols: int = 4, 
     tracked, red lost), shrunk with area averaging, and a label strip below it: frame number, time, scale,
     rotation, score. The video is decoded once, from the start up to the last frame shown.
     """
-    cols, rows = int(cols), int(rows)
+    if rows is not None and count is not None:
+        raise UsageError(f"give rows or count, not both: rows={rows} means {cols} x {rows} frames, count={count} "
+                         f"means {count} frames in {cols} columns")
+    cols, rows = int(cols), int(SHEET_ROWS if rows is None else rows)
     if cols < 1 or rows < 1 or (count is not None and count < 1):
         raise UsageError("the sheet needs at least 1 column, 1 row and 1 frame")
     if width < 16 * cols:

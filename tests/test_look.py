@@ -314,6 +314,23 @@ def test_sheet_has_the_expected_size_and_shows_the_run(tiny_run, tmp_path):
     assert green[60].any()
 
 
+@pytest.mark.parametrize("rows", [2, 3], ids=["other", "the default's value"])
+def test_sheet_rows_and_count_are_alternatives(tiny_run, tmp_path, rows):
+    """Either fixes the number of frames, so giving both is an error, not one silently ignored."""
+    video, run_csv, _ = tiny_run
+    out = tmp_path / "sheet.png"
+    line = one_error_line(invoke("sheet", video.path, run_csv, "-o", out, "--rows", rows, "--count", 5), 2)
+    assert line == (f"lptrack: error: --rows and --count contradict each other: --rows {rows} shows 4 x {rows} "
+                    f"frames, --count 5 shows 5 frames in 4 columns; give one of them")
+    assert not out.exists()
+    with pytest.raises(UsageError, match="rows or count, not both"):
+        write_contact_sheet(video.path, run_csv, out, rows=rows, count=5)
+    assert not out.exists()
+    # Alone, --rows still sets the rows: 4 x 2 frames.
+    assert invoke("sheet", video.path, run_csv, "-o", out, "--rows", 2).exit_code == 0
+    assert png_size(out) == sheet_geometry(160, 120, 4, 8, 1600)["size"] == (640, 28 + 2 * (120 + 18))
+
+
 def test_write_contact_sheet_accepts_results(tiny_run, tmp_path):
     video, run_csv, _ = tiny_run
     table = read_run_csv(run_csv)

@@ -12,7 +12,7 @@ import click
 
 from ..errors import UsageError
 from ..geometry import check_roi_fits
-from ..look import (ROUND_TOLERANCE, find_video_for_csv, matplotlib_hint, plot_track,
+from ..look import (ROUND_TOLERANCE, SHEET_ROWS, find_video_for_csv, matplotlib_hint, plot_track,
                     read_frame, read_run_csv, roi_from_box, roi_from_points, write_contact_sheet,
                     write_frame_png)
 from . import OneLineErrors, main, parse_roi_option
@@ -158,14 +158,15 @@ Examples:
 @click.option("-o", "--out", "out_png", type=click.Path(dir_okay=False, path_type=Path), metavar="PNG",
               help="PNG to write. Default: <RUN stem>.sheet.png in the current folder.")
 @click.option("--cols", type=click.IntRange(min=1, max=64), default=4, show_default=True, help="Columns.")
-@click.option("--rows", type=click.IntRange(min=1, max=64), default=3, show_default=True, help="Rows.")
+@click.option("--rows", type=click.IntRange(min=1, max=64), default=None, metavar="N",
+              help=f"Rows: --cols x N frames. Default {SHEET_ROWS}; not with --count.")
 @click.option("--count", type=click.IntRange(min=1, max=4096), metavar="N",
-              help="Instead of --rows: N frames, in --cols columns.")
+              help="Instead of --rows: N frames in --cols columns (rows as needed).")
 @click.option("--width", type=click.IntRange(min=64, max=20000), default=1600, show_default=True, metavar="PX",
               help="Sheet width in pixels (tiles are never enlarged beyond the video's size).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing PNG.")
-def sheet(video: Path, run_csv: Path, out_png: Path | None, cols: int, rows: int, count: int | None, width: int,
-          overwrite: bool) -> None:
+def sheet(video: Path, run_csv: Path, out_png: Path | None, cols: int, rows: int | None, count: int | None,
+          width: int, overwrite: bool) -> None:
     """Write a contact sheet: evenly spaced annotated frames of a run, one PNG.
 
     Each tile is a frame of VIDEO with the run's outline and axis line (green
@@ -173,6 +174,9 @@ def sheet(video: Path, run_csv: Path, out_png: Path | None, cols: int, rows: int
     (r, degrees CCW), score. First and last rows of the run are always shown.
     Prints the PNG's path on stdout.
     """
+    if rows is not None and count is not None:
+        raise UsageError(f"--rows and --count contradict each other: --rows {rows} shows {cols} x {rows} frames, "
+                         f"--count {count} shows {count} frames in {cols} columns; give one of them")
     table = read_run_csv(run_csv)
     out_png = out_png or Path(f"{_run_stem(run_csv)}.sheet.png")
     path = write_contact_sheet(video, table, out_png, cols=cols, rows=rows, count=count, width=width,

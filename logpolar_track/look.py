@@ -593,21 +593,59 @@ def _as_table(run) -> RunTable:
     return RunTable.from_results(run)
 
 
+def _video_stem(csv_path: Path) -> str:
+    """``clip`` for ``clip.lptrack.csv``, ``clip.lptrack.jsonl`` (``lptrack run``'s default names) or ``clip.csv``."""
+    for suffix in (".lptrack.csv", ".lptrack.jsonl"):
+        if csv_path.name.endswith(suffix) and len(csv_path.name) > len(suffix):
+            return csv_path.name[:-len(suffix)]
+    return csv_path.stem
+
+
+def _video_search(csv_path, folders: Sequence) -> tuple[str, list[tuple[Path, list[Path]]]]:
+    """The stem looked for, and each folder searched (each once, in order) with the videos found there."""
+    csv_path = Path(csv_path)
+    stem = _video_stem(csv_path)
+    searched, seen = [], set()
+    for folder in [csv_path.parent, *map(Path, folders)]:
+        key = folder.resolve()
+        if key in seen:
+            continue
+        seen.add(key)
+        searched.append((folder, [folder / f"{stem}{ext}" for ext in VIDEO_EXTENSIONS
+                                  if (folder / f"{stem}{ext}").is_file()]))
+    return stem, searched
+
+
 def find_video_for_csv(csv_path, folders: Sequence = (".",)) -> Path | None:
     """The video a run CSV was made from, when that is obvious; else None.
 
-    A run CSV does not name its video. ``<stem>.lptrack.csv`` (``lptrack run``'s default name) or
-    ``<stem>.csv`` is matched with ``<stem>`` plus one of :data:`VIDEO_EXTENSIONS` in the CSV's folder, then
-    in ``folders``; the first folder with exactly one such file wins. Annotated outputs (``*.lptrack.*``)
-    are never chosen.
+    A run CSV does not name its video. ``<stem>.lptrack.csv`` (``lptrack run``'s default name; or
+    ``<stem>.lptrack.jsonl``) or ``<stem>.csv`` is matched with ``<stem>`` plus one of
+    :data:`VIDEO_EXTENSIONS` in the CSV's folder, then in ``folders``; the first folder with exactly one such
+    file wins. Annotated outputs (``*.lptrack.*``) are never chosen. :func:`describe_video_search` says why
+    none was found.
     """
-    csv_path = Path(csv_path)
-    stem = csv_path.name[:-len(".lptrack.csv")] if csv_path.name.endswith(".lptrack.csv") else csv_path.stem
-    for folder in [csv_path.parent, *map(Path, folders)]:
-        found = [folder / f"{stem}{ext}" for ext in VIDEO_EXTENSIONS if (folder / f"{stem}{ext}").is_file()]
+    for _, found in _video_search(csv_path, folders)[1]:
         if len(found) == 1:
             return found[0]
     return None
+
+
+def describe_video_search(csv_path, folders: Sequence = (".",)) -> str:
+    """Where :func:`find_video_for_csv` looked for the video of ``csv_path`` and why it took none, as a phrase
+    for a message (``no clip.mp4 (or .avi, ...) in 'runs' or the current folder``)."""
+    stem, searched = _video_search(csv_path, folders)
+    here = Path.cwd().resolve()
+
+    def place(folder: Path) -> str:
+        return "the current folder" if folder.resolve() == here else f"'{folder}'"
+
+    several = [(folder, found) for folder, found in searched if len(found) > 1]
+    if several:
+        folder, found = several[0]
+        return f"{place(folder)} holds several videos it could be ({', '.join(p.name for p in found)})"
+    others = ", ".join(VIDEO_EXTENSIONS[1:])
+    return f"no {stem}{VIDEO_EXTENSIONS[0]} (or {others}) in {' or '.join(place(f) for f, _ in searched)}"
 
 
 # ----------------------------------------------------------------------------------------------------------

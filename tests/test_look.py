@@ -407,6 +407,37 @@ def test_plot_finds_the_video_next_to_a_default_named_csv(tiny_run, tmp_path, mo
     assert png_size(folder / "tiny.lptrack.plot.png") == PLOT_SIZE
 
 
+@needs_matplotlib
+def test_plot_says_where_it_looked_when_it_finds_no_video(tiny_run, tmp_path, monkeypatch):
+    _, run_csv, _ = tiny_run
+    (tmp_path / "runs").mkdir()
+    (tmp_path / "runs" / "tiny.lptrack.csv").write_text(run_csv.read_text())
+    monkeypatch.chdir(tmp_path)
+    result = invoke("plot", "runs/tiny.lptrack.csv", "-o", "p.png")
+    assert result.exit_code == 0 and result.stdout == "p.png\n"
+    assert result.stderr == ("lptrack: note: no thumbnail: no tiny.mp4 (or .avi, .mov, .mkv, .m4v, .webm) in 'runs' "
+                             "or the current folder; give the tracked video with --video VIDEO (or --no-video for "
+                             "blank axes)\n")
+    (tmp_path / "tiny.mp4").write_bytes(b"")
+    (tmp_path / "tiny.avi").write_bytes(b"")
+    result = invoke("plot", "runs/tiny.lptrack.csv", "-o", "p.png", "--overwrite")
+    assert result.exit_code == 0
+    assert "no thumbnail: the current folder holds several videos it could be (tiny.mp4, tiny.avi); give the " \
+           "tracked video with --video VIDEO" in result.stderr
+    for quiet in ("-q", "--no-video"):
+        result = invoke("plot", "runs/tiny.lptrack.csv", "-o", "p.png", "--overwrite", quiet)
+        assert result.exit_code == 0 and result.stderr == ""
+    # A failed plot is one error line, without the note before it.
+    assert "already exists" in one_error_line(invoke("plot", "runs/tiny.lptrack.csv", "-o", "p.png"), 1)
+
+
+def test_video_of_a_json_lines_run_is_found_by_its_stem_not_the_annotated_copy(tmp_path):
+    for name in ("clip.lptrack.mp4", "clip.mp4"):
+        (tmp_path / name).write_bytes(b"")
+    assert find_video_for_csv(tmp_path / "clip.lptrack.jsonl", folders=()) == tmp_path / "clip.mp4"
+    assert find_video_for_csv(tmp_path / "clip.lptrack.csv", folders=()) == tmp_path / "clip.mp4"
+
+
 def test_plot_without_matplotlib_gives_the_install_hint(tiny_run, tmp_path, monkeypatch):
     _, run_csv, _ = tiny_run
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # makes `import matplotlib` raise ImportError

@@ -12,8 +12,8 @@ import click
 
 from ..errors import UsageError
 from ..geometry import check_roi_fits
-from ..look import (ROUND_TOLERANCE, SHEET_ROWS, find_video_for_csv, matplotlib_hint, plot_track,
-                    read_frame, read_run_csv, roi_from_box, roi_from_points, write_contact_sheet,
+from ..look import (ROUND_TOLERANCE, SHEET_ROWS, describe_video_search, find_video_for_csv, matplotlib_hint,
+                    plot_track, read_frame, read_run_csv, roi_from_box, roi_from_points, write_contact_sheet,
                     write_frame_png)
 from . import OneLineErrors, main, parse_roi_option
 
@@ -106,7 +106,9 @@ def roi(video: Path, index: int, box: str | None, points: str | None, round_tol:
 The run CSV does not name its video: the thumbnail comes from --video, or
 from <stem>.mp4 (.avi, .mov, .mkv, .m4v, .webm) when exactly one such file
 sits next to the CSV (or in the current folder), where <stem> is the CSV's
-name without .lptrack.csv (or .csv). --no-video draws the path on blank axes.
+name without .lptrack.csv (.lptrack.jsonl, .csv). A note on stderr says
+which video was taken, or where none was found. --no-video draws the path
+on blank axes.
 
 \b
 Examples:
@@ -122,7 +124,8 @@ Examples:
 @click.option("--video", "video", type=_VIDEO, metavar="VIDEO", help="The tracked video, for the thumbnail.")
 @click.option("--no-video", is_flag=True, help="No thumbnail, even if the video can be found.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing PNG.")
-@click.option("-q", "--quiet", is_flag=True, help="No note on stderr about which video was used.")
+@click.option("-q", "--quiet", is_flag=True, help="No note on stderr about which video was used, or that none was "
+                                                   "found.")
 def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path | None, no_video: bool,
          overwrite: bool, quiet: bool) -> None:
     """Draw a run CSV as a figure (PNG): path, scale, rotation, score.
@@ -139,12 +142,18 @@ def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path 
     if no_video and video is not None:
         raise UsageError("--video and --no-video contradict each other; give one of them")
     table = read_run_csv(run_csv)
+    note = None
     if video is None and not no_video:
         video = find_video_for_csv(run_csv)
-        if video is not None and not quiet:
-            click.echo(f"lptrack: thumbnail from '{video}' (give --video to choose another)", err=True)
+        if video is not None:
+            note = f"lptrack: thumbnail from '{video}' (give --video to choose another)"
+        else:
+            note = (f"lptrack: note: no thumbnail: {describe_video_search(run_csv)}; give the tracked video with "
+                    f"--video VIDEO (or --no-video for blank axes)")
     out_png = out_png or Path(f"{_run_stem(run_csv)}.plot.png")
     path = plot_track(table, out_png, video=video, ground_truth=gt_path, overwrite=overwrite)
+    if note is not None and not quiet:
+        click.echo(note, err=True)  # after the plot, so that a failure is one error line, not a note before it
     click.echo(str(path))
 
 

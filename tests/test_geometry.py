@@ -39,6 +39,31 @@ def test_parse_roi_rejects_with_message(spec, fragment):
     assert "cx,cy" in message or "got" in message
 
 
+@pytest.mark.parametrize("values, message", [
+    ((80, 60, math.nan, 20, 0), "an ellipse needs finite numbers (pixels and degrees), got a=nan"),
+    ((math.inf, 60, 20, 20, -math.inf), "an ellipse needs finite numbers (pixels and degrees), got cx=inf, "
+                                        "angle_deg=-inf"),
+    ((80, 60, 0, 20, 0), "an ellipse's semi-axes must be > 0 pixels, got a=0, b=20"),
+    ((80, 60, 20, -1e-6, 0), "an ellipse's semi-axes must be > 0 pixels, got a=20, b=-1e-06"),
+], ids=["nan-axis", "inf-centre-and-angle", "zero-axis", "negative-axis"])
+def test_ellipse_refuses_non_finite_values_and_non_positive_semi_axes(values, message):
+    with pytest.raises(RoiError) as err:
+        Ellipse(*values)
+    assert str(err.value) == message
+    assert isinstance(err.value, ValueError)  # what callers outside lptrack catch
+
+
+def test_ellipse_made_from_another_is_checked_too():
+    roi = Ellipse.circle(80, 60, 20)
+    assert roi.moved(1e6, -1e6, 1e-3, 1e9) == Ellipse(1e6, -1e6, 0.02, 0.02, 1e9)  # odd but finite: kept
+    with pytest.raises(RoiError, match="semi-axes must be > 0"):
+        roi.moved(80, 60, 0.0)
+    with pytest.raises(RoiError, match="got cx=nan"):
+        roi.moved(math.nan, 60)
+    with pytest.raises(RoiError, match="got a=-5, b=-5"):
+        Ellipse.circle(0, 0, -5)
+
+
 def test_to_spec_round_trips():
     for roi in (Ellipse.circle(12.5, 7, 3), Ellipse(1, 2, 3, 4, 33.25)):
         assert parse_roi(roi.to_spec()) == roi

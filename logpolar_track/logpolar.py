@@ -162,12 +162,21 @@ class PhaseCorrelator:
         ``(n_rho, n_theta)``.
     lowpass : float or None
         Standard deviation of the Gaussian frequency weight, in cycles per sample.
+    support : ndarray, (n_rho, n_theta), optional
+        Weights, 0 to 1, multiplied into the window: the samples that belong to the object (e.g. a thin
+        ellipse's own outline on the circle it is sampled on). Fixed to the grid, so like the window it does not
+        move with the image's shifts.
     """
 
-    def __init__(self, shape: tuple[int, int], lowpass: float | None = 0.1):
+    def __init__(self, shape: tuple[int, int], lowpass: float | None = 0.1, support: np.ndarray | None = None):
         n_rho, n_theta = shape
         self.shape = (n_rho, n_theta)
         self.window = np.hanning(n_rho + 2)[1:-1, None].astype(np.float32) * np.ones((1, n_theta), np.float32)
+        if support is not None:
+            support = np.asarray(support, dtype=np.float32)
+            if support.shape != self.shape or not np.all((support >= 0) & (support <= 1)) or not support.any():
+                raise ValueError(f"support must be {self.shape} weights from 0 to 1, not all 0")
+            self.window = self.window * support
         fy = np.fft.fftfreq(n_rho)[:, None]
         fx = np.fft.rfftfreq(n_theta)[None, :]
         if lowpass is None:

@@ -29,9 +29,9 @@ def warp(img, scale, angle_deg, centre=CENTRE):
     return cv2.warpAffine(img, m, img.shape[::-1], flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
 
 
-def peak(ref_img, img, grid=None, centre=CENTRE):
+def peak(ref_img, img, grid=None, centre=CENTRE, support=None):
     grid = grid or LogPolarGrid(RADIUS, RADIUS, n_rho=64, n_theta=128)
-    pc = PhaseCorrelator((grid.n_rho, grid.n_theta))
+    pc = PhaseCorrelator((grid.n_rho, grid.n_theta), support=support)
     ref = pc.spectrum(grid.sample(ref_img, [centre], 1.0, 0.0))
     cur = pc.spectrum(grid.sample(img, [centre], 1.0, 0.0))
     p = find_peaks(pc.correlate(ref, cur))
@@ -51,6 +51,27 @@ def test_known_change_recovered_within_sub_bin_bounds(image, scale, angle):
     assert d_rho == pytest.approx(math.log(scale) / grid.log_step, abs=0.25)
     assert d_theta == pytest.approx(angle / grid.degrees_per_bin, abs=0.25)
     assert height > 0.5
+
+
+@pytest.mark.parametrize("scale, angle", [(1.06, 4.0), (0.95, -7.0)])
+def test_a_support_weight_reads_part_of_a_known_change(image, scale, angle):
+    """A support fixed to the grid (here a 40 x 8 px ellipse's outline on a circle of radius 64 px, as lpcf weights
+    thin ellipses) is a window that does not move with the image, so, as any such window, it reads a shift short:
+    measured 58-65 % of it here, against 97-103 % without the support. The sign is right and the match high, so a
+    tracker that samples again at each estimate reads the rest on the next frame."""
+    grid = LogPolarGrid(64.0, 64.0, n_rho=32, n_theta=64)
+    u, v = grid.offsets
+    support = np.clip((1.2 - np.hypot(u / 40.0, v / 8.0)) / 0.4, 0.0, 1.0)
+    d_rho, d_theta, height, _ = peak(image, warp(image, scale, angle), grid, support=support)
+    assert 0.5 <= d_rho / (math.log(scale) / grid.log_step) <= 1.05
+    assert 0.5 <= d_theta / (angle / grid.degrees_per_bin) <= 1.05
+    assert height > 0.8
+
+
+@pytest.mark.parametrize("support", [np.ones((32, 63)), np.full((32, 64), 1.5), np.zeros((32, 64))])
+def test_a_support_must_be_weights_of_the_grids_shape(support):
+    with pytest.raises(ValueError, match="support must be"):
+        PhaseCorrelator((32, 64), support=support)
 
 
 def test_antisymmetry(image):

@@ -349,14 +349,15 @@ def test_thin_patches_have_a_sidelobe():
 
 
 @pytest.mark.parametrize("seed", [1, 7])
-@pytest.mark.parametrize("angle_deg", [0.0, 30.0])
+@pytest.mark.parametrize("angle_deg", [0.0, 30.0, 45.0, 90.0])
 def test_a_thin_ellipse_keeps_its_angle(seed, angle_deg):
     """An 80 x 12 px textured ellipse (aspect 0.15) drifting 3 px and turning 0.5 degrees a frame keeps its angle
-    within 3 degrees (median) and its centre within a quarter of its mean radius (3.9 px). Measured: upright, every
-    frame, 0.9-1.0 degrees; tilted 30 degrees, 93-95 % of the frames, 1.0-1.3 degrees. Before, upright, on its own
-    thin log-polar grid a small turn was a shear and the angle ran off (68 % and 10 % of the frames, 10 and 34
-    degrees); tilted, its search patch was its upright bounding box, mostly background (2 % and 12 %, 30 and 18
-    degrees)."""
+    within 3 degrees (median) and its centre within a quarter of its mean radius (3.9 px). Measured: every frame,
+    0.2-1.3 degrees, at every tilt. Before its log-polar match was weighted to its outline (it covers 6 % of the
+    circle it is matched on), the background led the match: tilted 45 and 90 degrees, 36-83 % of the frames. Before
+    that, upright, on its own thin log-polar grid a small turn was a shear and the angle ran off (68 % and 10 % of
+    the frames, 10 and 34 degrees); tilted, its search patch was its upright bounding box, mostly background (2 %
+    and 12 %, 30 and 18 degrees)."""
     rng = np.random.default_rng(seed)
     roi = Ellipse(320, 240, 40, 6, angle_deg)
     x, y, heading = 320.0, 240.0, rng.uniform(0, 2 * math.pi)
@@ -368,7 +369,7 @@ def test_a_thin_ellipse_keeps_its_angle(seed, angle_deg):
     frames = list(synthetic_sequence(poses, roi, seed=seed))
     _, results = run(frames, roi)
     within = np.mean(centre_errors(results, poses[1:]) < 0.25 * math.sqrt(roi.a * roi.b))
-    assert within >= (1.0 if angle_deg == 0.0 else 0.9)
+    assert within >= 0.95
     assert np.median([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(results, poses[1:])]) <= 3.0
 
 

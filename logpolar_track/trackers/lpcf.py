@@ -452,7 +452,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self._last_sample = state, spectrum
         response = self.spectra.correlate(self._filter_parts, spectrum)
         dy, dx, peak, psr = _peak_and_psr(response)
-        motion = _rotate_screen(np.array([dx, dy]) * self.step * state.scale, self._patch_angle + state.rotation_deg)
+        motion = self._samples_to_pixels(dx, dy, state)
         moved = Similarity(state.cx + motion[0], state.cy + motion[1], state.scale, state.rotation_deg, peak)
         return moved, psr, peak
 
@@ -503,7 +503,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         objects coming back into view, against 24 now.)
         """
         width, height = self.frame_size
-        t = math.radians(self._patch_angle + pose.rotation_deg)
+        t = math.radians(self._axes_deg(pose))
         cos_t, sin_t = math.cos(t), math.sin(t)
         spacing = 2 * self.step * pose.scale  # pixels between samples of the map
         nx = _even((width * abs(cos_t) + height * abs(sin_t)) / spacing + 2)
@@ -672,8 +672,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
                 break
             best = state, distance
             du, dv, d_log_scale, d_angle = step
-            motion = _rotate_screen(np.array([du, dv]) * self.step * state.scale,
-                                    self._patch_angle + state.rotation_deg)
+            motion = self._samples_to_pixels(du, dv, state)
             moved = Similarity(state.cx + motion[0], state.cy + motion[1], state.scale * math.exp(d_log_scale),
                                state.rotation_deg + math.degrees(d_angle), state.score)
             if (math.hypot(moved.cx - start.cx, moved.cy - start.cy) > _REFINE_MAX_SAMPLES * self.step * start.scale
@@ -754,12 +753,22 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self._references = self.correlator.spectrum(np.stack(images))
 
     # -- sampling ------------------------------------------------------------------------------------------
+    def _axes_deg(self, state: Similarity) -> float:
+        """Direction on screen (degrees, counter-clockwise from +x) of the first axis of the patches and of the
+        log-polar grid at ``state``: the ROI's axis ``a``, turned by the estimate's rotation."""
+        return self._patch_angle + state.rotation_deg
+
+    def _samples_to_pixels(self, d_across: float, d_down: float, state: Similarity) -> np.ndarray:
+        """A move of ``(d_across, d_down)`` samples along the patch's axes at ``state`` as ``(dx, dy)`` pixels on
+        screen (y down)."""
+        return _rotate_screen(np.array([d_across, d_down]) * self.step * state.scale, self._axes_deg(state))
+
     def _patch(self, frame, state: Similarity, size: tuple[int, int] | None = None) -> np.ndarray:
         """The search patch in the object's frame: ``size`` samples (``self.size`` unless given), ``step *
         scale`` pixels apart."""
         nx, ny = self.size if size is None else size
         k = self.step * state.scale
-        t = math.radians(self._patch_angle + state.rotation_deg)
+        t = math.radians(self._axes_deg(state))
         cos_t, sin_t = math.cos(t), math.sin(t)
         c, s = k * cos_t, k * sin_t
         # Sample (p, q) -> pixel centre + R(ROI angle + rotation) * k * (p - nx/2, q - ny/2), R counter-clockwise on
@@ -854,7 +863,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
     def _log_polar(self, frame, state: Similarity) -> np.ndarray:
         """Log-polar image at ``state`` (``LogPolarGrid.sample`` for one centre, with the maps made by
         ``cv2.addWeighted`` from the grid's offsets: equal up to float rounding, a third of the cost)."""
-        psi = math.radians(self.roi.angle_deg + state.rotation_deg)
+        psi = math.radians(self._axes_deg(state))
         c, s = state.scale * math.cos(psi), state.scale * math.sin(psi)
         u, v = self.grid.offsets
         map_x = cv2.addWeighted(u, c, v, -s, state.cx, dtype=cv2.CV_32F)

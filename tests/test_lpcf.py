@@ -174,11 +174,11 @@ def _half_covered(seed, frames_total=70, first=20, last=50):
     return roi, poses, frames
 
 
-@pytest.mark.parametrize("seed", [7, 11, 14])
+@pytest.mark.parametrize("seed", [7, 12, 14])
 def test_occlusion_mask_hides_the_covered_half_and_recovers(seed):
     """``lpcf-masked`` marks the log-polar sectors facing the cover as hidden and those facing away as visible,
     and is back on the object once it is uncovered (measured on seeds 6-15: all ten back, within 0.7 px and
-    0.9 degrees; ``lpcf`` without masks lost seed 11 for good: 13 px, 35 degrees)."""
+    0.9 degrees; ``lpcf`` without masks stays 2.4-2.5 px off on seeds 12 and 13)."""
     roi, poses, frames = _half_covered(seed)
     tracker = create_tracker("lpcf-masked")
     tracker.init(frames[0], roi)
@@ -201,9 +201,9 @@ def test_occlusion_mask_hides_the_covered_half_and_recovers(seed):
     assert np.median(centre_errors(after, truth)) <= 1.0
     assert np.median([abs(s.scale / p.scale - 1) for (_, s), p in zip(after, truth)]) <= 0.02
     assert np.median([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(after, truth)]) <= 1.0
-    if seed == 11:  # without the mask, the cover throws scale and angle off and the tracker does not come back
+    if seed == 12:  # without the mask, the cover throws scale and angle off and the tracker comes back off-centre
         _, unmasked = run(frames, roi)
-        assert np.median(centre_errors(unmasked[55:], truth)) > 5.0
+        assert np.median(centre_errors(unmasked[55:], truth)) > 2.0
 
 
 def test_redetection_does_not_jump_to_a_patch_of_background():
@@ -226,8 +226,9 @@ def test_a_half_covered_object_is_mostly_found_again():
     """Whether the object is found again after a half cover depends on the scene: when the cover goes it may
     have turned 25 degrees more than the estimate, which the filter does not recognise. Over seeds 0-15 of the
     half-cover scene, ``lpcf`` is back on the object (every frame tracked, median error <= 1 px) from 10 frames
-    after the cover in 11 (measured; 12 over 80 frames; 14 before the gradient refinement, whose chaotic effect
-    moves which seeds these are; ``lpcf-masked`` 16 over 80 frames). Bound: 10."""
+    after the cover in 13 (measured; 14 over 80 frames, 12 before tracking resumed only at 0.4 of the running
+    match; 14 before the gradient refinement, whose chaotic effect moves which seeds these are; ``lpcf-masked``
+    15 over 80 frames). Bound: 10."""
     back = 0
     for seed in range(16):
         roi, poses, frames = _half_covered(seed)
@@ -313,6 +314,71 @@ def test_finds_the_object_coming_back_from_the_other_side(seed):
     assert len(back) == 14
     assert all(results[i - 1][0] for i in back)
     assert np.median(centre_errors([results[i - 1] for i in back], [poses[i] for i in back])) <= 1.0
+
+
+def _leaves_and_comes_back_elsewhere(case):
+    """Case ``case`` of 24 generated leave-and-return scenes: a textured ellipse (radius 25-45 px, tilted 0-180
+    degrees, turning 0.3 degrees a frame) leaves by the right edge at 6-10 px a frame, stays out for 10 frames and
+    comes back across the frame from the right, the left or below (``case % 3``), on 640 x 480 or 320 x 240."""
+    rng = np.random.default_rng(100 + case)
+    width, height = [(640, 480), (320, 240)][case % 2]
+    r = float(rng.uniform(25, 45))
+    background = random_texture(height, width, rng)
+    texture = random_texture(int(4 * r) | 1, int(4 * r) | 1, rng)
+    roi = Ellipse(width / 2, height / 2, r, r * float(rng.uniform(0.7, 1.0)), float(rng.uniform(0, 180)))
+    v = 6.0 + 4 * rng.random()
+    path = [(x, height / 2) for x in np.arange(width / 2, width + 2 * r, v)] + [(width + 2 * r, height / 2)] * 10
+    y_back = float(rng.uniform(0.3, 0.7)) * height
+    if case % 3 == 0:
+        path += [(x, y_back) for x in np.arange(width + 2 * r, width * 0.3, -v)]
+    elif case % 3 == 1:
+        path += [(x, y_back) for x in np.arange(-2 * r, width * 0.7, v)]
+    else:
+        path += [(width * 0.4, y) for y in np.arange(height + 2 * r, height * 0.3, -v)]
+    poses = [Pose(float(x), float(y), 1.0, 0.3 * i) for i, (x, y) in enumerate(path)]
+    return roi, poses, [render_frame(background, texture, roi, pose) for pose in poses], r
+
+
+@pytest.mark.parametrize("case", [7, 11, 14, 16])
+def test_a_tilted_object_is_found_again_and_never_tracked_on_background(case):
+    """Tilted objects (ROIs at 52-172 degrees) leaving the view and coming back elsewhere. Over the 24 generated
+    cases, all are found again (80 % of the last 15 frames with the object wholly in view, within a quarter of its
+    radius) and none is reported tracked while away. These four failed when the patches turned with the ROI: the
+    search, over a map turned alike, took the straight edge of the frame's constant surround for the object and
+    settled on background by the edge (cases 11 and 16, tracked there while away), and a lost estimate wandering on
+    background resumed at a weak match (14). (24 of 24 upright before that; 20 of 24 and 2 tracked while away
+    then; with the mirrored surround alone 22 and 0; with resuming only at 0.4 of the running level too, 24 and 0.)"""
+    roi, poses, frames, r = _leaves_and_comes_back_elsewhere(case)
+    width, height = frames[0].shape[1], frames[0].shape[0]
+    _, results = run(frames, roi)
+    away = [k for k, p in enumerate(poses) if p.cx > width + r or p.cx < -r or p.cy > height + r]
+    assert sum(results[k - 1][0] for k in away) <= len(away) / 2
+    back = [k for k, p in enumerate(poses) if k >= len(poses) - 15 and r < p.cx < width - r and r < p.cy < height - r]
+    correct = [results[k - 1][0] and centre_errors([results[k - 1]], [poses[k]])[0] < 0.25 * r for k in back]
+    assert back and np.mean(correct) >= 0.8
+
+
+def test_prediction_gives_way_under_camera_jitter():
+    """The whole view shifted by an independent +-25 px each frame (a shaking camera, frames dropped): the last
+    frame's motion then predicts the next one wrong, and predicting with it doubled the miss (41 % and 79 % of the
+    frames tracked, seeds 0 and 1). Predicting only as much as predicting has been helping: 99 % and 99 %."""
+    width, height, radius = 640, 480, 40.0
+    for seed in (0, 1):
+        rng = np.random.default_rng(seed)
+        background = random_texture(height + 54, width + 54, rng)
+        texture = cv2.addWeighted(random_texture(99, 99, rng), 0.8, 0, 0, 40)
+        roi = Ellipse.circle(320, 240, radius)
+        x, y, heading = 320.0, 240.0, rng.uniform(0, 2 * math.pi)
+        poses, frames = [], []
+        for i in range(80):
+            sx, sy = (0, 0) if i == 0 else (int(v) for v in rng.integers(-25, 26, 2))
+            poses.append(Pose(x + sx, y + sy, 1.0, 0.5 * i))
+            view = background[27 - sy:27 - sy + height, 27 - sx:27 - sx + width]
+            frames.append(render_frame(view, texture, roi, poses[-1]))
+            heading += rng.normal(0, 0.08)
+            x, y = x + 3 * math.cos(heading), y + 3 * math.sin(heading)
+        _, results = run(frames, roi)
+        assert np.mean(centre_errors(results, poses[1:]) < 0.25 * radius) >= 0.95
 
 
 def test_motion_after_the_whole_frame_search_is_the_mean_motion_since_lost():

@@ -109,7 +109,8 @@ class SimilarityTracker(Tracker):
         frame = np.asarray(frame)
         check_frame(frame, self.frame_size)
         estimate = self._estimate(self._prepared(frame), self.last)
-        ok = estimate is not None and estimate.score >= self.lost_threshold and _finite(estimate)
+        ok = (estimate is not None and estimate.score >= self.lost_threshold and _finite(estimate)
+              and not self._searching())
         if ok:
             self.last = estimate
             self._accept(estimate)
@@ -135,6 +136,11 @@ class SimilarityTracker(Tracker):
 
     def _accept(self, estimate: Similarity) -> None:
         """Hook called with every estimate accepted as tracked (e.g. to update a template)."""
+
+    def _searching(self) -> bool:
+        """Whether the last estimate is a search for a lost object rather than a track: it is then reported
+        lost, whatever its score."""
+        return False
 
 
 def check_frame(frame: np.ndarray, size: tuple[int, int] | None = None) -> None:

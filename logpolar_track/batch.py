@@ -35,8 +35,8 @@ from .geometry import ROI_SYNTAX, Ellipse, parse_roi
 from .pipeline import CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, run_video
 from .results import FORMATS, header_line
 from .trackers import tracker_class
-from .video import (CODECS_BY_EXTENSION, announced_frame_count, make_output_folder, remove_empty_folders,
-                    temporary_path)
+from .video import (CODECS_BY_EXTENSION, announced_frame_count, frames_to_track, make_output_folder,
+                    remove_empty_folders, temporary_path)
 
 #: File extensions searched for in input folders (case-insensitive).
 VIDEO_EXTENSIONS: tuple[str, ...] = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".ts",
@@ -497,11 +497,8 @@ def announced_job_frames(job: VideoJob) -> int | None:
     Opens the video's container without decoding (about a millisecond for a local file); may be approximate
     for containers that store only a duration (.mkv, .webm).
     """
-    announced = announced_frame_count(job.video)
-    if not announced:
-        return job.max_frames
-    remaining = max(announced - job.start_frame, 0)
-    return remaining if job.max_frames is None else min(remaining, job.max_frames)
+    frames = frames_to_track(announced_frame_count(job.video), job.start_frame, job.max_frames)
+    return job.max_frames if frames is None else frames
 
 
 class BatchProgress:

@@ -165,7 +165,9 @@ class PhaseCorrelator:
     support : ndarray, (n_rho, n_theta), optional
         Weights, 0 to 1, multiplied into the window: the samples that belong to the object (e.g. a thin
         ellipse's own outline on the circle it is sampled on). Fixed to the grid, so like the window it does not
-        move with the image's shifts.
+        move with the image's shifts, and a tight one reads them short: 58-65 % of a 4-7 degree turn or 5-6 %
+        scale change for a 40 x 8 px outline on a 64 px circle (tests/test_logpolar.py). Trackers that sample
+        again at each estimate read the rest on the next frame.
     """
 
     def __init__(self, shape: tuple[int, int], lowpass: float | None = 0.1, support: np.ndarray | None = None):

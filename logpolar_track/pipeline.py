@@ -21,7 +21,8 @@ from .geometry import ROI_SYNTAX, Ellipse, check_roi_fits, parse_roi
 from . import trackers as _trackers
 from .results import CsvWriter, FrameResult
 from .trackers import Tracker, create_tracker
-from .video import CODECS_BY_EXTENSION, VideoReader, VideoWriter, check_output_path, writes_in_place
+from .video import (CODECS_BY_EXTENSION, VideoReader, VideoWriter, check_output_path, frames_to_track,
+                    writes_in_place)
 
 #: Tracker used when none is named: the registry's choice (``trackers.DEFAULT_TRACKER``) when it makes one,
 #: else ``fixed``. Read from one place so the CLI, the docs and the library agree.
@@ -317,9 +318,7 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
         check_roi_fits(ellipse, reader.width, reader.height, source=video_path.name)
         # Inputs are checked (above) before outputs, outputs before any frame is tracked or written.
         _check_outputs(video_path, video_out, csv_out, overwrite)
-        announced = max(reader.frame_count - start_frame, 0)  # 0: the container does not say
-        if max_frames is not None and announced:
-            announced = min(announced, max_frames)
+        announced = frames_to_track(reader.frame_count, start_frame, max_frames) or 0  # 0: not known
         total = announced or max_frames
         csv_writer = video_writer = written = None
         finish = _no_op

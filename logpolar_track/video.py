@@ -77,6 +77,15 @@ def announced_frame_count(path) -> int:
     return int(count) if math.isfinite(count) and count > 0 else 0
 
 
+def frames_to_track(frame_count: int, start_frame: int, max_frames: int | None) -> int | None:
+    """Frames a run from ``start_frame`` tracks, at most ``max_frames``, in a video whose container announces
+    ``frame_count`` frames (0 past the end); None when it does not say (``frame_count`` 0)."""
+    if frame_count <= 0:
+        return None
+    remaining = max(frame_count - start_frame, 0)
+    return remaining if max_frames is None else min(remaining, max_frames)
+
+
 class VideoReader:
     """Frames of a video file as ``(index, time_s, frame)``, decoded ahead in a background thread.
 

@@ -14,7 +14,7 @@ from typing import Callable, ClassVar
 
 import numpy as np
 
-from ..errors import RoiError, UsageError
+from ..errors import UsageError
 from ..geometry import Ellipse, check_roi_fits
 from ..logpolar import to_gray
 
@@ -80,8 +80,8 @@ class SimilarityTracker(Tracker):
     """Shared bookkeeping of lptrack's own trackers, which estimate a similarity transform per frame.
 
     Subclasses implement :meth:`_start` and :meth:`_estimate` on a grey frame (:attr:`gray_dtype`); this class
-    turns their estimates into :class:`TrackState`, marks frames whose score is below ``lost_threshold`` as
-    lost, and keeps the last good state for them.
+    turns their estimates into :class:`TrackState`, marks frames whose score is below ``lost_threshold`` (or
+    that :meth:`_searching` says are a search) as lost, and keeps the last good state for them.
     """
 
     #: Element type of the grey frames given to :meth:`_start` and :meth:`_estimate`: float32, or None for
@@ -173,13 +173,11 @@ def check_start(frame: np.ndarray, roi: Ellipse) -> None:
     UsageError
         The frame is not an image.
     RoiError
-        The ROI is malformed (non-finite, semi-axes too small) or does not fit the frame.
+        The ROI is too small or does not fit the frame (an :class:`Ellipse` is finite, with semi-axes > 0, by
+        construction).
     """
     frame = np.asarray(frame)
     check_frame(frame)
-    values = (roi.cx, roi.cy, roi.a, roi.b, roi.angle_deg)
-    if not all(math.isfinite(v) for v in values):
-        raise RoiError(f"the ROI must be finite numbers, got {roi}")
     check_roi_fits(roi, frame.shape[1], frame.shape[0])
 
 

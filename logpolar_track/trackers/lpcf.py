@@ -3,7 +3,8 @@ scale and rotation, each run in the frame of the other's estimate.
 
 Per frame:
 
-1. **Predict** the centre with a damped constant-velocity model, so fast motion stays inside the search patch.
+1. **Predict** the centre with a damped constant-velocity model, so fast motion stays inside the search patch;
+   the prediction is scaled down while it has been missing by more than no prediction would (camera jitter).
 2. **Translate**: sample a patch around the prediction in the object's own frame (along the ROI ellipse's axes
    turned by the current rotation, scaled by the current scale; ``padding`` times the object's size around it),
    compute grey and oriented-gradient features, and correlate them with a multi-channel discriminative
@@ -22,14 +23,15 @@ Per frame:
    deforming object, an out-of-plane turn, an occluder) steps 2 and 3 are repeated in the corrected frame instead
    (``iterations``), unless their estimates already agree.
 5. **Judge and learn**: the score is the match (geometric mean of the filter's response peak and the
-   log-polar match height); below ``lost_threshold`` the frame is reported lost with the last good geometry.
+   log-polar match height); below ``lost_threshold`` the frame is reported lost with the last good geometry, and
+   so is every frame after a sudden drop (below ``drop_ratio``) until the match is back above a higher level.
    Only frames with a sharp filter response (peak-to-sidelobe ratio) and no sudden drop of the match update
    the filter and the log-polar model (running averages), so occluders and distractors are not learnt. After
    a few frames of such a drop the object is searched for over the whole frame (re-detection): every third
    frame the filter is correlated with the frame at half its sampling density (a large frame, one part at a
    time, nearest the object's last place first), and the best two places are correlated again at full
-   density; one is taken only if it matches the object's log-polar appearance too, well enough to be reported
-   tracked. A lost estimate near the frame's edge counts as a drop (the object left the view). With
+   density; one is taken only if it matches the object's log-polar appearance too, well enough to resume
+   tracking. A lost estimate near the frame's edge counts as a drop (the object left the view). With
    ``occlusion_mask`` (``lpcf-masked``), parts of the log-polar image that stop matching the model are left
    out of step 3.
 
@@ -101,7 +103,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         1.3 -> 0.387, 1.6 -> 0.412, 2.0 -> 0.406, 2.5 -> 0.395 (0.8 -> 0.298); sample_videos 0.928 -> 0.939.
     lost_threshold : float
         Score (the match: geometric mean of the filter's response peak and the log-polar match height, 0 to 1)
-        below which a frame is reported lost, keeping the last good geometry. On the 7 real sequences, 0.3
+        below which a frame is reported lost, keeping the last good geometry (so is a frame after a sudden drop
+        until the match recovers: see ``drop_ratio``). On the 7 real sequences, 0.3
         marks 6.5 % of the frames on the object (IoU >= 0.5) and 52 % of those off it (IoU < 0.1); 0.2 marks
         3.9 % and 31 %.
     drop_ratio : float
@@ -110,7 +113,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         search of the whole frame (see ``redetect_after``); a slowly weakening match (a deforming object)
         keeps being learnt even where it is reported lost. 0.2 let the tracker run off with the
         motion it had measured on a swapped object (tests/test_lpcf.py); on the real sequences 0.2 and 0.3
-        are alike (0.412 and 0.407).
+        are alike (0.412 and 0.407). After a drop, tracking resumes only once the match is back above a third
+        more (``_RESUME_OVER_DROP``: 0.4 times the level at 0.3); the frames in between are reported lost.
     psr_learn : float
         Peak-to-sidelobe ratio of the filter's response above which a frame is learnt. Learning from weaker
         responses let the model drift onto whatever crossed the object: the 7 real sequences' 10-start mean IoU
@@ -348,8 +352,12 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self._blur_cache = self._grey_cache = None
 
     def _searching(self) -> bool:
-        # After a drop, a match above lost_threshold but below the resume level (_RESUME_RATIO) is still a search.
+        # After a drop, a match above lost_threshold but below the resume level is still a search.
         return self.misses > 0
+
+    def _resume_level(self) -> float:
+        """The match at which tracking resumes after a drop (see ``_RESUME_OVER_DROP``)."""
+        return min(_RESUME_OVER_DROP * self.drop_ratio, 1.0) * self.match_level
 
     def _prediction_gain(self) -> float:
         """How much of the velocity to predict with, 0 to 1: 1 while predicting has missed less, on average, than
@@ -422,7 +430,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         # Hysteresis: once dropped, a match must be back above a higher level to resume, not just above the drop
         # level, or a lost estimate wandering on background, or the search, settles on a weak look-alike.
         dropped = match < self.drop_ratio * self.match_level
-        held = not dropped and self.misses > 0 and match < _RESUME_RATIO * self.match_level
+        held = not dropped and self.misses > 0 and match < self._resume_level()
         if match < self.lost_threshold and not dropped:
             # A lost estimate pressed against the frame's edge is an object that left the view: search for its
             # return. (Without this the running level sinks to the weak match left at the edge, no drop is ever
@@ -509,7 +517,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         # settling on background 150 px away while the object was out of view).
         _, here = self._scale_rotate(frame, best)
         _, there = self._scale_rotate(frame, found[0])
-        floor = max(peak * here, (self.drop_ratio * self.match_level) ** 2, self.lost_threshold ** 2)
+        floor = max(peak * here, self._resume_level() ** 2, self.lost_threshold ** 2)
         if found[2] * there <= floor:
             return best, psr, peak
         return found
@@ -1071,12 +1079,13 @@ _SECOND_MATCH_LOG_SCALE, _SECOND_MATCH_DEGREES = 0.02, 2.0
 #: 17 % of lpcf's frame rate on the 7 real sequences (crossing, human3, freeman1: up to 25 %), for a 10-start
 #: mean IoU AUC of 0.466 against 0.465 (with the later conditional second match, the refinement costs 2.5 %).
 _REFINE_HOPELESS, _REFINE_RETRY = 1.5, 5
-#: After a drop (a match under ``drop_ratio`` times its running level), tracking resumes only at a match of this
-#: times that level. Resuming at the drop level, 4 of 24 generated objects leaving the view and coming back were
-#: not found again, and 2 were reported tracked on background while away (tilted ROIs; with the map's mirrored
-#: border alone, 22 and 0); with 0.4, 24 and 0. Real sequences, 10 starts: 0.4707 -> 0.4706 (0.45: 0.448, 0.5:
-#: 0.442; human3 comes back from behind a pole with a weak match).
-_RESUME_RATIO = 0.4
+#: After a drop (a match under ``drop_ratio`` times its running level), tracking resumes only at a match this many
+#: times the drop's level (and a place found by the whole-frame search is taken only if it matches as well).
+#: Resuming at the drop level, 4 of 24 generated objects leaving the view and coming back were not found again,
+#: and 2 were reported tracked on background while away (tilted ROIs; with the map's mirrored border alone, 22 and
+#: 0); resuming at 0.4 of the running level (4/3 of 0.3), 24 and 0. Real sequences, 10 starts: 0.4707 -> 0.4706
+#: (0.45: 0.448, 0.5: 0.442; human3 comes back from behind a pole with a weak match).
+_RESUME_OVER_DROP = 4.0 / 3.0
 #: Rate of the running mean misses of the prediction (see ``_prediction_gain``). A disc under independent camera
 #: jitter of +-25 px a frame: tracked on 99 % of the frames, against 41-79 % with the full prediction (+-40 px: 46
 #: against 18-35 %); fast smooth motion (40-60 px a frame) unchanged; real sequences, 10 starts, 0.4706 -> 0.4710

@@ -576,6 +576,30 @@ def test_default_tracker_meets_the_issue_bounds_on_every_sample_video(name):
     assert result["rotation_error_median_deg"] <= 1.0
 
 
+def _zoom_and_turn():
+    """A disc of radius 50 px zooming (0.8-1.25) and turning half a turn over 120 frames."""
+    roi = Ellipse.circle(320, 240, 50)
+    poses = similarity_path(120, (320, 240), scale_range=(0.8, 1.25), turns=0.5, radius_px=60)
+    return roi, poses, list(synthetic_sequence(poses, roi, seed=3))
+
+
+def _counted(monkeypatch, method: str) -> list:
+    """A list that grows by one at each call of ``LogPolarCorrelationTracker.<method>``."""
+    import logpolar_track.trackers.lpcf as lpcf
+
+    calls, original = [], getattr(lpcf.LogPolarCorrelationTracker, method)
+    monkeypatch.setattr(lpcf.LogPolarCorrelationTracker, method,
+                        lambda self, *args: calls.append(1) or original(self, *args))
+    return calls
+
+
+def _assert_tracks_within(results, others, px, relative_scale, degrees):
+    for (_, a), (_, b) in zip(results, others, strict=True):
+        assert math.hypot(a.centre[0] - b.centre[0], a.centre[1] - b.centre[1]) <= px
+        assert abs(a.scale / b.scale - 1) <= relative_scale
+        assert abs(a.rotation_deg - b.rotation_deg) <= degrees
+
+
 def test_shortcuts_stay_close_to_the_straightforward_tracker(monkeypatch):
     """Two shortcuts save a third of a frame's time: the iterations stop once the estimates agree (no further
     correlation), and the learning step reuses the last correlated patch instead of sampling a fresh one. On a
@@ -585,13 +609,8 @@ def test_shortcuts_stay_close_to_the_straightforward_tracker(monkeypatch):
     believed; it is turned off here so that they run on every frame."""
     import logpolar_track.trackers.lpcf as lpcf
 
-    roi = Ellipse.circle(320, 240, 50)
-    poses = similarity_path(120, (320, 240), scale_range=(0.8, 1.25), turns=0.5, radius_px=60)
-    frames = list(synthetic_sequence(poses, roi, seed=3))
-    calls = []
-    translate = lpcf.LogPolarCorrelationTracker._translate
-    monkeypatch.setattr(lpcf.LogPolarCorrelationTracker, "_translate",
-                        lambda self, *args: calls.append(1) or translate(self, *args))
+    roi, poses, frames = _zoom_and_turn()
+    calls = _counted(monkeypatch, "_translate")
     _, shortcut = run(frames, roi, refine_steps=0)
     with_shortcuts, calls[:] = len(calls), []
     # Without them: every iteration runs, and every learning step samples its own patch.
@@ -600,10 +619,7 @@ def test_shortcuts_stay_close_to_the_straightforward_tracker(monkeypatch):
         monkeypatch.setattr(lpcf, name, -1.0)
     _, straight = run(frames, roi, refine_steps=0)
     assert with_shortcuts < 0.8 * len(calls)  # the shortcuts do fire (measured: 245 against 357 patches)
-    for (_, a), (_, b) in zip(shortcut, straight):
-        assert math.hypot(a.centre[0] - b.centre[0], a.centre[1] - b.centre[1]) <= 0.5
-        assert abs(a.scale / b.scale - 1) <= 0.01
-        assert abs(a.rotation_deg - b.rotation_deg) <= 0.5
+    _assert_tracks_within(shortcut, straight, 0.5, 0.01, 0.5)
     truth = poses[1:]
     assert np.median(centre_errors(shortcut, truth)) <= 1.05 * np.median(centre_errors(straight, truth))
 
@@ -616,22 +632,14 @@ def test_learning_from_the_last_correlated_patch_stays_close_to_sampling_afresh(
     and 0.03 degrees (seed 3 here; seeds 4 and 5 alike), no further from the truth."""
     import logpolar_track.trackers.lpcf as lpcf
 
-    roi = Ellipse.circle(320, 240, 50)
-    poses = similarity_path(120, (320, 240), scale_range=(0.8, 1.25), turns=0.5, radius_px=60)
-    frames = list(synthetic_sequence(poses, roi, seed=3))
-    calls = []
-    feature_spectrum = lpcf.LogPolarCorrelationTracker._feature_spectrum
-    monkeypatch.setattr(lpcf.LogPolarCorrelationTracker, "_feature_spectrum",
-                        lambda self, *args: calls.append(1) or feature_spectrum(self, *args))
+    roi, poses, frames = _zoom_and_turn()
+    calls = _counted(monkeypatch, "_feature_spectrum")
     _, reused = run(frames, roi)
     with_reuse, calls[:] = len(calls), []
     monkeypatch.setattr(lpcf, "_REUSE_OFF_CENTRE", -1.0)  # every learning step samples its own patch
     _, fresh = run(frames, roi)
     assert with_reuse <= len(calls) - 40
-    for (_, a), (_, b) in zip(reused, fresh):
-        assert math.hypot(a.centre[0] - b.centre[0], a.centre[1] - b.centre[1]) <= 0.2
-        assert abs(a.scale / b.scale - 1) <= 0.005
-        assert abs(a.rotation_deg - b.rotation_deg) <= 0.2
+    _assert_tracks_within(reused, fresh, 0.2, 0.005, 0.2)
     truth = poses[1:]
     assert np.median(centre_errors(reused, truth)) <= np.median(centre_errors(fresh, truth)) + 0.02
 

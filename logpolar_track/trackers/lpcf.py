@@ -1089,7 +1089,7 @@ _RESUME_OVER_DROP = 4.0 / 3.0
 #: Rate of the running mean misses of the prediction (see ``_prediction_gain``). A disc under independent camera
 #: jitter of +-25 px a frame: tracked on 94-99 % of the frames (seeds 0-3), against 41-95 % with the full
 #: prediction (+-40 px: 46 against 18-35 %); fast smooth motion (40-60 px a frame) unchanged; real sequences, 10
-#: starts, 0.4706 -> 0.4710 (rate 0.1: 0.4701; the gain's power 1 instead of 2: 0.4626).
+#: starts, 0.4706 -> 0.4710 (rate 0.1: 0.4701; at rate 0.1 the gain squared or cubed, 0.4701 or 0.4628).
 _PREDICTION_RATE = 0.2
 #: Re-detection (see ``_redetect``): the frame, or the next part of it, is searched every ``_SEARCH_EVERY``
 #: frames (every frame: the same 10-start mean IoU AUC, 0.469, and 24 of 24 objects found coming back, at three

@@ -854,7 +854,7 @@ def write_contact_sheet(video_path, run_csv_or_rows, out_png, *, cols: int = 4, 
     out_png : str or Path
         PNG to write (atomically).
     cols : int
-        Columns of tiles.
+        Columns of tiles (as many as there are frames to show, when fewer).
     rows : int, optional
         Rows of tiles: ``cols * rows`` frames, evenly spaced over the run's rows, first and last included.
         Default :data:`SHEET_ROWS` (3), unless ``count`` is given.
@@ -896,6 +896,7 @@ def write_contact_sheet(video_path, run_csv_or_rows, out_png, *, cols: int = 4, 
     table = _as_table(run_csv_or_rows)
     out_png = check_output_path(out_png, overwrite=overwrite, what="contact sheet")
     wanted = sheet_indices(len(table), count if count is not None else cols * rows)
+    cols = min(cols, len(wanted))  # fewer frames than columns: no empty columns
     by_frame = {int(table.frames[i]): i for i in wanted}
     video_path = Path(video_path)
     tiles: dict[int, np.ndarray] = {}

@@ -331,6 +331,13 @@ def test_sheet_rows_and_count_are_alternatives(tiny_run, tmp_path, rows):
     assert png_size(out) == sheet_geometry(160, 120, 4, 8, 1600)["size"] == (640, 28 + 2 * (120 + 18))
 
 
+def test_sheet_of_fewer_frames_than_columns_has_no_empty_columns(tiny_run, tmp_path):
+    video, run_csv, _ = tiny_run
+    out = tmp_path / "sheet.png"
+    assert invoke("sheet", video.path, run_csv, "-o", out, "--count", 2, "--cols", 4, "--width", 400).exit_code == 0
+    assert png_size(out) == (2 * 160, 28 + 120 + 18)  # 2 tiles of the video's own size, not 4 of 100 px
+
+
 def test_write_contact_sheet_accepts_results(tiny_run, tmp_path):
     video, run_csv, _ = tiny_run
     table = read_run_csv(run_csv)

@@ -674,15 +674,21 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             # A sliver of an ellipse (a 60 x 3 px ROI: under a sample across) gives the steps too little to stand
             # on (seen 318 px off where the filter alone stayed within 6 px): no refinement for it.
             return
-        v, u = np.mgrid[:ny, :nx] * self.step
-        u -= nx / 2.0 * self.step  # sample (p, q) lies (p - nx/2, q - ny/2) samples from the centre (see _patch)
-        v -= ny / 2.0 * self.step
-        radius_squared = self._patch_ellipse(roi).radius_squared(u, v)  # sample offsets (pixels, y down)
+        radius_squared = self._ellipse_radius_squared(roi, (nx, ny))
         weights = np.clip(1.0 - radius_squared / _REFINE_EXTENT ** 2, 0.0, 1.0)
         # The outermost samples' gradients are one-sided; the ellipse can reach them after _even rounds down.
         weights[[0, -1], :] = weights[:, [0, -1]] = 0.0
         self.appearance = AppearanceSubspace(self._patch(frame, first, self.appearance_size), np.sqrt(weights),
                                              n_components=self.subspace_components)
+
+    def _ellipse_radius_squared(self, roi: Ellipse, size: tuple[int, int]) -> np.ndarray:
+        """``(ny, nx)``: each sample of a patch of ``size`` ``(nx, ny)`` at scale 1, as the squared radius of the
+        ROI's ellipse through it (1 on the outline)."""
+        nx, ny = size
+        v, u = np.mgrid[:ny, :nx] * self.step
+        u -= nx / 2.0 * self.step  # sample (p, q) lies (p - nx/2, q - ny/2) samples from the centre (see _patch)
+        v -= ny / 2.0 * self.step
+        return self._patch_ellipse(roi).radius_squared(u, v)  # sample offsets (pixels, y down)
 
     def _patch_ellipse(self, roi: Ellipse) -> Ellipse:
         """The ROI as the patches see it: centred on the origin, turned into the patches' frame."""
@@ -910,11 +916,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
 
     def _plain_object_mask(self, frame, first: Similarity, roi: Ellipse) -> np.ndarray | None:
         """The training mask of a plain object over a busy surround (see ``_PLAIN_OBJECT_RATIO``), or None."""
-        nx, ny = self.size
-        v, u = np.mgrid[:ny, :nx] * self.step
-        u -= nx / 2.0 * self.step  # sample offsets in pixels, as in _start_appearance
-        v -= ny / 2.0 * self.step
-        radius = np.sqrt(self._patch_ellipse(roi).radius_squared(u, v))  # 1 on the ROI's outline
+        radius = np.sqrt(self._ellipse_radius_squared(roi, self.size))  # 1 on the ROI's outline
         energy = (patch_features(self._patch(frame, first))[1:] ** 2).sum(axis=0)  # oriented gradients
         inside, around = energy[radius < 1.0], energy[(radius > 1.2) & (radius < 2.0)]
         if inside.size == 0 or around.size == 0 or inside.mean() >= _PLAIN_OBJECT_RATIO * around.mean():
@@ -1144,6 +1146,15 @@ _AGREED_LOG_SCALE, _AGREED_DEGREES, _AGREED_SAMPLES = 0.005, 0.5, 0.2
 #: ROI, crossing's pedestrian (aspect 0.34) fell from 0.741 to 0.659 (10-start mean IoU AUC), the 7 real sequences
 #: from 0.470 to 0.437. None of the real sequences is thinner than 0.34, so they are unchanged.
 _ROUND_GRID_ASPECT = 0.25
+#: On that circle, the log-polar match is weighted to the ellipse's own outline: 1 within this range's first value
+#: (1 = the ROI's outline, in the ellipse's own normalised radius), falling to 0 at the second. Unweighted, such an
+#: ellipse covers 6 % of the circle's samples, the background the rest, and the match followed the background:
+#: 40 x 6 px semi-axes, 6 tilts x 4 seeds, on 82 % of the frames (9 of 24 runs under 90 %), median rotation error
+#: 1.5 degrees; weighted, 98 % (1 of 24), 0.6 degrees. (80 x 12: 85 -> 96 %, 0.9 -> 0.2 degrees.) Ranges (1.0,
+#: 1.6) and (1.0, 1.3), which take in more background, gave 87 % and 91 %; (0.7, 1.0) and (0.9, 1.1) 97 %. Round
+#: grids for wider ellipses, weighted so, still lose to their own grids (10-start mean IoU AUC 0.464-0.467 for
+#: aspect < 0.5, 0.420-0.435 for all, against 0.471).
+_ROUND_GRID_SUPPORT = (0.8, 1.2)
 #: A plain object over a busy surround: where the oriented-gradient energy per sample within the ROI's ellipse is
 #: under this fraction of that around it (1.2 to 2 times its radius), the static surround dominates the patch and
 #: held the filter (it read 20-36 % of the object's move; a disc of a quarter of its surround's contrast was tracked
@@ -1155,15 +1166,6 @@ _ROUND_GRID_ASPECT = 0.25
 #: the surround, tracked 1-2 of the 3 discs; for every ROI, masks cost human3 0.05-0.11 over 10 starts.
 _PLAIN_OBJECT_RATIO = 0.5
 _PLAIN_OBJECT_MASK = (0.9, 1.1)
-#: On that circle, the log-polar match is weighted to the ellipse's own outline: 1 within this range's first value
-#: (1 = the ROI's outline, in the ellipse's own normalised radius), falling to 0 at the second. Unweighted, such an
-#: ellipse covers 6 % of the circle's samples, the background the rest, and the match followed the background:
-#: 40 x 6 px semi-axes, 6 tilts x 4 seeds, on 82 % of the frames (9 of 24 runs under 90 %), median rotation error
-#: 1.5 degrees; weighted, 98 % (1 of 24), 0.6 degrees. (80 x 12: 85 -> 96 %, 0.9 -> 0.2 degrees.) Ranges (1.0,
-#: 1.6) and (1.0, 1.3), which take in more background, gave 87 % and 91 %; (0.7, 1.0) and (0.9, 1.1) 97 %. Round
-#: grids for wider ellipses, weighted so, still lose to their own grids (10-start mean IoU AUC 0.464-0.467 for
-#: aspect < 0.5, 0.420-0.435 for all, against 0.471).
-_ROUND_GRID_SUPPORT = (0.8, 1.2)
 #: How far the final estimate may be from the last correlated patch -- samples off its centre, change of scale
 #: (natural log), of angle (degrees) -- for that patch to be learnt from. With the gradient refinement the last
 #: correlation comes before both log-polar matches, so scale and angle differ by about one frame's change:

@@ -660,7 +660,7 @@ def test_learning_from_the_last_correlated_patch_stays_close_to_sampling_afresh(
     import logpolar_track.trackers.lpcf as lpcf
 
     roi, poses, frames = _zoom_and_turn()
-    calls = _counted(monkeypatch, "_feature_spectrum")
+    calls = _counted(monkeypatch, "_features_and_spectrum")
     _, reused = run(frames, roi)
     with_reuse, calls[:] = len(calls), []
     monkeypatch.setattr(lpcf, "_REUSE_OFF_CENTRE", -1.0)  # every learning step samples its own patch

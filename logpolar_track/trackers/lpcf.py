@@ -318,7 +318,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         first = Similarity(roi.cx, roi.cy, 1.0, 0.0, 1.0)
         #: Weights of the filter's training features (see ``_PLAIN_OBJECT_RATIO``), or None: the whole patch.
         self.train_mask = self._plain_object_mask(frame, first, roi)
-        spec = self._training_spectrum(self._feature_spectrum(frame, first))
+        spec = self._training_spectrum(*self._features_and_spectrum(frame, first))
         self.numerator = self.label_conj * spec
         self.denominator = self.spectra.power(spec)
         self._filter()
@@ -482,8 +482,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
 
     def _translate(self, frame, state: Similarity) -> tuple[Similarity, float, float]:
         """Correlate the filter with a patch around ``state``; returns the moved state, PSR and peak value."""
-        spectrum = self._feature_spectrum(frame, state)
-        self._last_sample = state, spectrum
+        features, spectrum = self._features_and_spectrum(frame, state)
+        self._last_sample = state, features, spectrum
         response = self.spectra.correlate(self._filter_parts, spectrum)
         dy, dx, peak, psr = _peak_and_psr(response)
         motion = self._samples_to_pixels(dx, dy, state)
@@ -646,12 +646,12 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         # real sequences the median is 0.02 samples, the 95th percentile 0.25): learn from it rather than
         # sample another patch, unless the object is further off its centre than that or the patch's scale and
         # angle are further from the final ones than about a frame's change (see _REUSE_OFF_CENTRE).
-        sampled_at, spec = self._last_sample
+        sampled_at, features, spec = self._last_sample
         off_centre = math.hypot(state.cx - sampled_at.cx, state.cy - sampled_at.cy) / (self.step * state.scale)
         if (off_centre > _REUSE_OFF_CENTRE or abs(math.log(state.scale / sampled_at.scale)) > _REUSE_LOG_SCALE
                 or abs(state.rotation_deg - sampled_at.rotation_deg) > _REUSE_DEGREES):
-            spec = self._feature_spectrum(frame, state)
-        spec = self._training_spectrum(spec)
+            features, spec = self._features_and_spectrum(frame, state)
+        spec = self._training_spectrum(features, spec)
         rate = 1 - (1 - self.learning_rate) ** self.learn_every
         self.numerator = (1 - rate) * self.numerator + rate * self.label_conj * spec
         self.denominator = (1 - rate) * self.denominator + rate * self.spectra.power(spec)
@@ -901,18 +901,17 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self._blur_cache = (frame, blur_k, x0, y0, x1, y1, image, level)
         return image, x0, y0, level
 
-    def _feature_spectrum(self, frame, state: Similarity) -> np.ndarray:
-        """Packed spectra of the windowed features of the patch at ``state`` (kept, for :meth:`_training_spectrum`,
-        until the next call)."""
-        self._last_features = patch_features(self._patch(frame, state), window=self.window)
-        return self.spectra.forward(self._last_features)
+    def _features_and_spectrum(self, frame, state: Similarity) -> tuple[np.ndarray, np.ndarray]:
+        """The windowed features ``(C, h, w)`` of the patch at ``state`` and their packed spectra."""
+        features = patch_features(self._patch(frame, state), window=self.window)
+        return features, self.spectra.forward(features)
 
-    def _training_spectrum(self, spectrum: np.ndarray) -> np.ndarray:
-        """What the filter learns from: ``spectrum`` (the last :meth:`_feature_spectrum`), or, for a plain object
-        (:attr:`train_mask`), its features on the object alone."""
+    def _training_spectrum(self, features: np.ndarray, spectrum: np.ndarray) -> np.ndarray:
+        """What the filter learns from: ``spectrum`` (of ``features``), or, for a plain object
+        (:attr:`train_mask`), the spectra of its features on the object alone."""
         if self.train_mask is None:
             return spectrum
-        return self.spectra.forward(self._last_features * self.train_mask)
+        return self.spectra.forward(features * self.train_mask)
 
     def _plain_object_mask(self, frame, first: Similarity, roi: Ellipse) -> np.ndarray | None:
         """The training mask of a plain object over a busy surround (see ``_PLAIN_OBJECT_RATIO``), or None."""

@@ -441,6 +441,29 @@ def test_thin_patches_have_a_sidelobe():
     assert math.isfinite(psr) and psr > 20
 
 
+def _is_fast_dft_size(n: int) -> bool:
+    for factor in (2, 3, 5):
+        while n % factor == 0:
+            n //= factor
+    return n == 1
+
+
+@pytest.mark.parametrize("b", [8, 11, 17, 19, 23, 29, 31, 37, 41, 47, 53, 59, 60])
+def test_patch_sides_are_fast_dft_sizes_near_the_padded_extent(b):
+    """Both patch sides are even products of 2, 3 and 5 (OpenCV's DFT took 2-3 times as long on 38 or 58
+    samples as on 40 or 60), and the nearest such size to the padded object's extent: between consecutive such
+    sizes up to 80 the gap is at most 8, so at most 4 samples off."""
+    frame = random_texture(240, 320, np.random.default_rng(0))
+    roi = Ellipse(160.0, 120.0, 60.0, float(b), 0.0)
+    tracker = create_tracker("lpcf")
+    tracker.init(frame, roi)
+    half_w, half_h = tracker._patch_ellipse(roi).half_extents()
+    wanted = (2 * half_w * (1 + tracker.padding) / tracker.step, 2 * half_h * (1 + tracker.padding) / tracker.step)
+    for side, extent in zip(tracker.size, wanted):
+        assert side % 2 == 0 and _is_fast_dft_size(side), (side, extent)
+        assert abs(side - extent) <= 4, (side, extent)
+
+
 @pytest.mark.parametrize("seed", [1, 7])
 @pytest.mark.parametrize("angle_deg", [0.0, 30.0, 45.0, 90.0])
 def test_a_thin_ellipse_keeps_its_angle(seed, angle_deg):

@@ -202,7 +202,7 @@ def test_occlusion_mask_hides_the_covered_half_and_recovers(seed):
     assert np.median([abs(s.scale / p.scale - 1) for (_, s), p in zip(after, truth)]) <= 0.02
     assert np.median([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(after, truth)]) <= 1.0
     if seed == 12:  # without the mask, the cover throws scale and angle off and the tracker comes back off-centre
-        _, unmasked = run(frames, roi)
+        _, unmasked = run(frames, roi, colour_weight=0.0)  # lpcf-masked's colour weight
         assert np.median(centre_errors(unmasked[55:], truth)) > 2.0
 
 
@@ -409,23 +409,28 @@ def test_prediction_gives_way_under_camera_jitter():
 
 
 def test_motion_after_the_whole_frame_search_is_the_mean_motion_since_lost():
-    """Where the search finds the object again, the velocity it predicts the next frame with is the object's mean
-    motion since it was lost (measured 5.8-6.6 px a frame against its 7), not the jump to the place found counted
-    as one frame's motion (29.5-29.9 px a frame, capped)."""
+    """Where the search finds the object again, the velocity it predicts the next frame with is the mean motion
+    from the last good place to the place found, over the frames since (damped as every velocity is; measured
+    4.4-6.7 px a frame against the object's 7), not the jump to the place found counted as one frame's motion
+    (29.5-29.9 px a frame, capped)."""
     for seed in (0, 3):
         roi, poses, frames = _leaves_and_comes_back_from_below(seed)
         tracker = create_tracker(DEFAULT_TRACKER)
         tracker.init(frames[0], roi)
         searching, found = False, None
         for k, frame in enumerate(frames[1:], start=1):
+            last_good, gap = tracker._last_good, tracker.misses + 1
             tracker.update(frame)
             if searching and tracker.misses == 0:
                 found = k
                 break
             searching = tracker.misses >= tracker.redetect_after
         assert found is not None
+        jump = np.array([tracker.cursor.cx - last_good.cx, tracker.cursor.cy - last_good.cy])
+        assert gap > 10 and np.hypot(*jump) > 100
+        np.testing.assert_allclose(tracker.velocity, tracker.velocity_damping * jump / gap, atol=1e-9)
         true_speed = math.hypot(poses[found].cx - poses[found - 1].cx, poses[found].cy - poses[found - 1].cy)
-        assert abs(float(np.hypot(*tracker.velocity)) - true_speed) <= 2.0
+        assert 0.5 * true_speed <= np.hypot(*tracker.velocity) <= 1.5 * true_speed
 
 
 def test_thin_patches_have_a_sidelobe():
@@ -487,6 +492,41 @@ def test_a_thin_ellipse_keeps_its_angle(seed, angle_deg):
     within = np.mean(centre_errors(results, poses[1:]) < 0.25 * math.sqrt(roi.a * roi.b))
     assert within >= 0.95
     assert np.median([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(results, poses[1:])]) <= 3.0
+
+
+def _retextured(seed, frames_total=70):
+    """A reddish disc of radius 25 px over a blue-green background, drifting 2 px a frame and swaying; over frames
+    20-30 its texture turns into an unrelated one (an appearance change the filter does not know)."""
+    rng = np.random.default_rng(seed)
+    background = random_texture(240, 320, rng, colour=False).astype(np.float32)
+    background = np.clip(background[..., None] * np.array([1.1, 1.0, 0.5]), 0, 255).astype(np.uint8)
+    before, after = (random_texture(81, 81, rng, colour=False).astype(np.float32) for _ in range(2))
+    roi = Ellipse.circle(100, 120, 25)
+    poses, frames = [], []
+    for i in range(frames_total):
+        share = min(max((i - 20) / 10.0, 0.0), 1.0)
+        texture = ((1 - share) * before + share * after)[..., None] * np.array([0.3, 0.45, 1.4])
+        poses.append(Pose(100 + 2.0 * i, 120 + 20 * math.sin(i / 12), 1.0, 0.0))
+        frames.append(render_frame(background, np.clip(texture, 0, 255).astype(np.uint8), roi, poses[-1]))
+    return roi, poses, frames
+
+
+def test_colour_keeps_the_estimate_on_an_object_whose_texture_changes():
+    """Colour does not change where the texture does: with the colour response the tracker's own estimate (its
+    cursor: frames after the change are reported lost, as the filter does not recognise the object) stays on the
+    object on 79-100 % of the frames of seeds 1-3 (within 6 px), against 49-89 % without (measured)."""
+    for seed in (1, 2, 3):
+        roi, poses, frames = _retextured(seed)
+        near = {}
+        for weight in (0.0, 0.3):
+            tracker = create_tracker("lpcf", colour_weight=weight)
+            tracker.init(frames[0], roi)
+            errors = []
+            for frame, pose in zip(frames[1:], poses[1:]):
+                tracker.update(frame)
+                errors.append(math.hypot(tracker.cursor.cx - pose.cx, tracker.cursor.cy - pose.cy))
+            near[weight] = np.mean(np.array(errors) < 6.0)
+        assert near[0.3] >= 0.75 and near[0.3] >= near[0.0] + 0.1, (seed, near)
 
 
 def test_grey_frames_with_a_channel_axis_track_as_grey():
@@ -656,18 +696,19 @@ def test_shortcuts_stay_close_to_the_straightforward_tracker(monkeypatch):
     generated zoom-and-turn path the track stays within 0.5 px, 1 % and 0.5 degrees of the tracker without them
     (measured: 0.34 px, 0.73 %, 0.37 degrees at most; medians 0.14 px, 0.18 %, 0.06 degrees), and no further
     from the truth. They are shortcuts of the filter's iterations, which run where the gradient refinement is not
-    believed; it is turned off here so that they run on every frame."""
+    believed; it is turned off here so that they run on every frame. So is the colour response, which these
+    shortcuts do not touch (with it the shortcuts' track is 0.30 px from the truth, median, against 0.23)."""
     import logpolar_track.trackers.lpcf as lpcf
 
     roi, poses, frames = _zoom_and_turn()
     calls = _counted(monkeypatch, "_translate")
-    _, shortcut = run(frames, roi, refine_steps=0)
+    _, shortcut = run(frames, roi, refine_steps=0, colour_weight=0.0)
     with_shortcuts, calls[:] = len(calls), []
     # Without them: every iteration runs, and every learning step samples its own patch.
     monkeypatch.setattr(lpcf, "_REUSE_OFF_CENTRE", -1.0)
     for name in ("_AGREED_LOG_SCALE", "_AGREED_DEGREES", "_AGREED_SAMPLES"):
         monkeypatch.setattr(lpcf, name, -1.0)
-    _, straight = run(frames, roi, refine_steps=0)
+    _, straight = run(frames, roi, refine_steps=0, colour_weight=0.0)
     assert with_shortcuts < 0.8 * len(calls)  # the shortcuts do fire (measured: 245 against 357 patches)
     _assert_tracks_within(shortcut, straight, 0.5, 0.01, 0.5)
     truth = poses[1:]
@@ -695,16 +736,22 @@ def test_learning_from_the_last_correlated_patch_stays_close_to_sampling_afresh(
 
 
 def test_colour_frames_track_exactly_as_their_grey_conversion():
-    """Only the sampled regions of a colour frame are converted to grey; the track is the one of the frames
-    converted whole."""
+    """Only the sampled regions of a colour frame are converted to grey; without the colour response the track
+    is the one of the frames converted whole. Grey video decoded as three equal channels is tracked on grey
+    alone, colour response or not."""
     roi = Ellipse(160, 120, 36, 24, 20)
     poses = similarity_path(20, (160, 120), scale_range=(0.9, 1.1), turns=0.1, radius_px=20)
     grey = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in synthetic_sequence(poses, roi, size=(320, 240), seed=11)]
     rng = np.random.default_rng(2)
     colour = [cv2.merge([g, cv2.add(g, 30), (rng.random(g.shape) * 255).astype(np.uint8)]) for g in grey]
-    _, from_colour = run(colour, roi)
+    _, from_colour = run(colour, roi, colour_weight=0.0)
     _, from_grey = run([cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in colour], roi)
     assert [s for _, s in from_colour] == [s for _, s in from_grey]
+    _, from_colour = run(colour, roi)
+    assert [s for _, s in from_colour] != [s for _, s in from_grey]  # the colour response is on by default
+    _, from_three_greys = run([cv2.merge([g, g, g]) for g in grey], roi)
+    _, from_grey = run(grey, roi)
+    assert [s for _, s in from_three_greys] == [s for _, s in from_grey]
 
 
 @pytest.mark.parametrize("scale, angle_deg", [(0.9, 0.0), (1.0, 30.0), (1.3, -60.0), (2.0, 10.0), (4.0, 100.0)])

@@ -226,9 +226,10 @@ def test_a_half_covered_object_is_mostly_found_again():
     """Whether the object is found again after a half cover depends on the scene: when the cover goes it may
     have turned 25 degrees more than the estimate, which the filter does not recognise. Over seeds 0-15 of the
     half-cover scene, ``lpcf`` is back on the object (every frame tracked, median error <= 1 px) from 10 frames
-    after the cover in 13 (measured; 14 over 80 frames, 12 before tracking resumed only at 0.4 of the running
-    match; 14 before the gradient refinement, whose chaotic effect moves which seeds these are; ``lpcf-masked``
-    15 over 80 frames). Bound: 10."""
+    after the cover in 11 (measured; also 11 over 80 frames). The colour response pulls the covered object towards
+    its visible half: without it, 13 (14 over 80 frames; 12 before tracking resumed only at 0.4 of the running
+    match; 14 before the gradient refinement, whose chaotic effect moves which seeds these are). ``lpcf-masked``,
+    without colour: 15 over 80 frames. Bound: 10."""
     back = 0
     for seed in range(16):
         roi, poses, frames = _half_covered(seed)

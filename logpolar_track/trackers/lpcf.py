@@ -348,7 +348,6 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self._colour_inside, self._colour_outside = radius_squared < 1.0, radius_squared > _COLOUR_SURROUND ** 2
             self.colour = ColourLikelihood(learning_rate=_COLOUR_LEARNING_RATE)
             self.colour.fit(self._colour_bins(frame, first), self._colour_inside, self._colour_outside)
-            half_w, half_h = self._patch_ellipse(roi).half_extents()
             # Odd sides, so that the box is centred on its sample.
             self._colour_box = (2 * int(half_w * _COLOUR_BOX / self.step) + 1,
                                 2 * int(half_h * _COLOUR_BOX / self.step) + 1)
@@ -854,6 +853,11 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         screen (y down)."""
         return _rotate_screen(np.array([d_across, d_down]) * self.step * state.scale, self._axes_deg(state))
 
+    def _pixels_to_samples(self, dx: float, dy: float, state: Similarity) -> np.ndarray:
+        """The inverse of :meth:`_samples_to_pixels`: a move of ``(dx, dy)`` pixels on screen as ``(d_across,
+        d_down)`` samples along the patch's axes at ``state``."""
+        return _rotate_screen(np.array([dx, dy]), -self._axes_deg(state)) / (self.step * state.scale)
+
     def _patch_matrix(self, state: Similarity, size: tuple[int, int]) -> np.ndarray:
         """The affine map ``(2, 3)`` from samples of a patch of ``size`` ``(nx, ny)`` at ``state`` to frame pixels
         (``cv2.warpAffine``'s inverse map): sample ``(p, q)`` -> the centre + R(ROI angle + rotation) * step *
@@ -872,21 +876,19 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         scale`` pixels apart; samples outside the frame are the frame's mean grey, or as ``border`` (an OpenCV
         border mode) says."""
         nx, ny = self.size if size is None else size
-        k = self.step * state.scale
-        t = math.radians(self._axes_deg(state))
-        cos_t, sin_t = math.cos(t), math.sin(t)
-        px, py = nx / 2.0, ny / 2.0
         matrix = self._patch_matrix(state, (nx, ny))
+        # The samples lie within (half_x, half_y) pixels of the centre: the turned patch's half extents.
+        c, s = abs(matrix[0, 0]), abs(matrix[0, 1])  # step * scale * |cos|, |sin| of the patch's angle
+        half_x, half_y = (nx * c + ny * s) / 2.0, (nx * s + ny * c) / 2.0
         flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
         # The anti-aliasing blur follows the scale the frame started at, not each iteration's: the scale moves
         # by a few per cent within a frame, and one blurred crop then serves all of the frame's patches.
         blur_k = self.step * self._blur_scale
         if blur_k > 1.5:  # shrinking: average first so the patch does not alias -- only the part the patch covers
-            # The samples lie within (reach_x, reach_y) of the centre; bilinear sampling reads one pixel further
-            # and the blur's kernel (4 sigma = 2 blur_k) two blur_k further, so the crop's own edges never show.
+            # Bilinear sampling reads one pixel beyond the samples and the blur's kernel (4 sigma = 2 blur_k) two
+            # blur_k further, so the crop's own edges never show.
             margin = 2 * blur_k + 3
-            reach_x = k * (px * abs(cos_t) + py * abs(sin_t)) + margin
-            reach_y = k * (px * abs(sin_t) + py * abs(cos_t)) + margin
+            reach_x, reach_y = half_x + margin, half_y + margin
             blurred = self._blurred(frame, blur_k, state.cx - reach_x, state.cy - reach_y,
                                     state.cx + reach_x, state.cy + reach_y)
             if blurred is None:
@@ -896,8 +898,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             matrix[:, 2] -= (x0, y0)
             matrix /= 2 ** level
         else:  # bilinear sampling reads one pixel beyond the samples
-            reach_x = k * (px * abs(cos_t) + py * abs(sin_t)) + 2
-            reach_y = k * (px * abs(sin_t) + py * abs(cos_t)) + 2
+            reach_x, reach_y = half_x + 2, half_y + 2
             frame, x0, y0 = self._float_region(frame, state.cx - reach_x, state.cy - reach_y,
                                                state.cx + reach_x, state.cy + reach_y)
             matrix[:, 2] -= (x0, y0)
@@ -975,8 +976,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         """
         if self._colour_map is not None and self._colour_map[0] is frame:
             _, first, weighted = self._colour_map
-            du, dv = _rotate_screen(np.array([state.cx - first.cx, state.cy - first.cy]),
-                                    -self._axes_deg(first)) / (self.step * first.scale)
+            du, dv = self._pixels_to_samples(state.cx - first.cx, state.cy - first.cy, first)
             du, dv = int(round(du)), int(round(dv))
             ny, nx = weighted.shape
             moved = np.zeros_like(weighted)

@@ -414,11 +414,17 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         moved, psr, peak = self._translate(frame, predicted)
         lead = math.hypot(predicted.cx - last.cx, predicted.cy - last.cy) / (self.step * last.scale)  # samples
         if self._last_psr >= self.psr_learn and psr < self.psr_learn and lead > _UNPREDICTED_SAMPLES:
-            # A confident track turned weak where the motion predicted it: the object may have stopped, turned
-            # back or bounced, which puts it nearer its last place than the prediction. Look there too.
-            still, still_psr, still_peak = self._translate(frame, last)
-            if still_psr > psr:
-                moved, psr, peak = still, still_psr, still_peak
+            # A confident track turned weak where the motion predicted it: the object may have stopped, or turned
+            # back (a bounce), which puts it at its last place or as far behind it as the prediction is ahead.
+            # Look there too, until a place answers confidently.
+            behind = Similarity(2 * last.cx - predicted.cx, 2 * last.cy - predicted.cy, last.scale,
+                                last.rotation_deg, last.score)
+            for place in (last, behind):
+                other, other_psr, other_peak = self._translate(frame, place)
+                if other_psr > psr:
+                    moved, psr, peak = other, other_psr, other_peak
+                if psr >= self.psr_learn:
+                    break
         here = moved
         if self.misses >= self.redetect_after:
             moved, psr, peak = self._redetect(frame, predicted, moved, psr, peak)
@@ -1224,12 +1230,13 @@ _PREDICTION_RATE = 0.2
 #: per feature channel; reducing the map further instead missed a 20 px object there), and the
 #: ``_SEARCH_CANDIDATES`` strongest places are tried (1 or 2: the same figures).
 _SEARCH_EVERY, _SEARCH_PART, _SEARCH_CANDIDATES = 3, 512, 2
-#: A prediction further than this many samples from the last place is checked against the last place itself when
-#: a confident track turns weak there (see ``_estimate``). A disc of radius 40 px bouncing off the frame's walls,
-#: 10 seeds: at 50 px a frame tracked on 98.5 % of the frames against 93.2 %, at 60 px 77.8 against 67.5 %, at 70 px
-#: 52.5 against 50.7 % (CSRT: 100 %). Real sequences, 10 starts: 0.5011 -> 0.5012 (4 samples: 0.5004; 2: 0.4987). The
-#: check on every weak frame, not only after a confident one, gave 0.480-0.497 (2 to 8 samples): on human3, whose
-#: matches are all weak, it chose between two poor places.
+#: A prediction further than this many samples from the last place is checked against the last place itself, and
+#: against the place as far behind it, when a confident track turns weak there (see ``_estimate``). A disc of radius
+#: 40 px bouncing off the frame's walls, 10 seeds, frames tracked: at 50 px a frame 100 % (93.2 % without the check,
+#: 98.5 % with the last place alone), at 60 px 90.7 % (67.5, 77.8), at 70 px 69.6 % (50.7, 52.5); CSRT 100 %. Real
+#: sequences, 10 starts: 0.5011 -> 0.5012, one start unchanged (the last place alone at 4 samples: 0.5004; 2:
+#: 0.4987). The last place checked on every weak frame, not only after a confident one, gave 0.480-0.497 (2 to 8
+#: samples): on human3, whose matches are all weak, it chose between two poor places.
 _UNPREDICTED_SAMPLES = 8.0
 #: A lost estimate closer than this many of the object's smaller semi-axes to the frame's edge counts as a drop.
 #: An object leaving the frame leaves the estimate up to a semi-axis or so inside it, on whatever is there; with

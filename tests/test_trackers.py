@@ -225,6 +225,9 @@ def test_every_accepted_frame_layout_tracks_alike(name):
     centres = {}
     later = _frame_kinds(moved)
     for kind, start in _frame_kinds(first).items():
+        # MIL draws its samples from OpenCV's global random generator: each layout starts from the same state, or
+        # what earlier tests drew moves its box by a pixel or two.
+        cv2.setRNGSeed(0)
         tracker = create_tracker(name)
         tracker.init(start, roi)
         ok, state = tracker.update(later[kind])

@@ -11,7 +11,9 @@ Per frame:
    correlation filter (MOSSE/DSST closed form). On colour video the response is merged with a colour response
    (the object's likelihood from colour histograms of it and its surround, averaged over a box: Staple's, see
    ``colour_weight``), which holds where the object deforms. The merged peak, refined to sub-sample precision,
-   gives the displacement; the filter's own peak and sharpness stay the confidence.
+   gives the displacement; the filter's own peak and sharpness stay the confidence. Where a confident track
+   turns weak at the prediction, the last place and the place as far behind it are correlated too (an object
+   that stopped or bounced back), and the sharpest response is kept.
 3. **Scale and rotate**: sample a log-polar image over the object's ellipse, enlarged 1.6 times to take in its
    outline, at the new centre and phase-correlate it with the log-polar appearance model: the peak's shift
    gives the change of scale and rotation, shrunk by a motion prior unless the match is near-perfect.

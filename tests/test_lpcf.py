@@ -164,6 +164,36 @@ def test_an_object_bouncing_back_is_looked_for_where_it_was_and_behind(speed_px)
         assert centre_errors(results, poses[1:]).max() <= 3.0
 
 
+def _spinning(kind: str) -> list[Pose]:
+    """A disc drifting 2 px a frame while it spins: 20 degrees a frame throughout (``steady``), speeding up to 25
+    degrees a frame over 30 frames (``spin-up``), or 20 degrees a frame for 30 frames and then not at all
+    (``stop``); 60 frames."""
+    turns = {"steady": lambda k: 20.0, "spin-up": lambda k: min(25.0, 25.0 * k / 30), "stop": lambda k: 20.0 * (k < 30)}
+    angle, poses = 0.0, []
+    for i in range(60):
+        poses.append(Pose(320.0 + 2.0 * i, 240.0 + 1.0 * i, 1.0, angle))
+        angle += turns[kind](i)
+    return poses
+
+
+@pytest.mark.parametrize("kind", ["steady", "spin-up", "stop"])
+def test_a_fast_spin_is_predicted(kind):
+    """The motion prior on the log-polar match shrinks a turn of 10 degrees a frame or more, so without predicting
+    the turn the estimate fell further behind each frame until the match was lost: 20 degrees a frame lost in 2 of
+    4 seeds, the spin-up in 4 of 4, the spin that stops in 3 of 4. Every frame is tracked now, within 2 px; the
+    angle within 2 degrees (median) and 8 degrees on every frame (the first turn, with no spin yet to predict, is
+    read only in part: 14 of 20 degrees)."""
+    roi = Ellipse.circle(320, 240, 40)
+    poses = _spinning(kind)
+    for seed in range(4):
+        frames = list(synthetic_sequence(poses, roi, size=(640, 480), seed=seed))
+        _, results = run(frames, roi)
+        assert all(ok for ok, _ in results)
+        assert centre_errors(results, poses[1:]).max() <= 2.0
+        angle_errors = np.array([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(results, poses[1:])])
+        assert np.median(angle_errors) <= 2.0 and angle_errors.max() <= 8.0
+
+
 def test_recovers_after_a_full_occlusion():
     """A larger disc of other texture covers the object for 8 frames while it moves on; the object is lost
     meanwhile (keeping its last good geometry) and found again as soon as it shows."""

@@ -1,8 +1,10 @@
 """The default tracker ``lpcf``: its conventions and confidence on synthetic cases.
 
 It is not held to the thesis trackers' accuracy bounds (tests/test_trackers.py): on their fast zoom-and-turn
-sequence (6 % and 7 degrees per frame, sustained) it still drifts off. It is the default because it is the
-most accurate tracker measured on sample_videos/ and on the real benchmark sequences.
+sequence (up to 6.5 % and 6.8 degrees a frame, sustained, the object shrinking to 17 px) it drifts off in 6 of 24
+runs (6 seeds x 2 shapes x 2 directions; 14 of 24 before fast turns and zooms were predicted), one of them among
+the four that test runs. It is the default because it is the most accurate tracker measured on sample_videos/
+and on the real benchmark sequences.
 
 Conventions: centre in pixels, scale relative to frame 0, rotation in degrees counter-clockwise on screen.
 """
@@ -192,6 +194,63 @@ def test_a_fast_spin_is_predicted(kind):
         assert centre_errors(results, poses[1:]).max() <= 2.0
         angle_errors = np.array([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(results, poses[1:])])
         assert np.median(angle_errors) <= 2.0 and angle_errors.max() <= 8.0
+
+
+def _zooming(rate: float, frames_total: int) -> list[Pose]:
+    """An object drifting 1.5 px and turning 1 degree a frame while its size changes by ``rate`` a frame (0.07: 7 %
+    larger each frame), reached over the first 5 frames."""
+    scale, poses = 1.0, []
+    for i in range(frames_total):
+        poses.append(Pose(320.0 + 1.5 * i, 240.0 + 0.5 * i, scale, 1.0 * i))
+        scale *= (1 + rate) ** min(1.0, (i + 1) / 5)
+    return poses
+
+
+@pytest.mark.parametrize("rate, radius, frames_total", [(0.07, 35, 18), (-0.07, 80, 18), (0.10, 30, 14)],
+                         ids=["in-7%", "out-7%", "in-10%"])
+def test_a_fast_zoom_is_predicted(rate, radius, frames_total):
+    """The motion prior on the log-polar match shrinks a zoom of 3.5 % a frame or more, and without predicting it
+    the estimate fell behind until the match was lost (to 2.8 times or 0.34 times the size): lost in 1, 2 and 2 of 4
+    seeds, up to 150 % off in scale. Every frame is tracked now, within 1 px and 2 % of the size."""
+    roi = Ellipse.circle(320, 240, radius)
+    poses = _zooming(rate, frames_total)
+    for seed in range(4):
+        frames = list(synthetic_sequence(poses, roi, size=(640, 480), seed=seed))
+        _, results = run(frames, roi)
+        assert all(ok for ok, _ in results)
+        assert centre_errors(results, poses[1:]).max() <= 1.0
+        assert max(abs(s.scale / p.scale - 1) for (_, s), p in zip(results, poses[1:])) <= 0.02
+
+
+def _reversing(change: str) -> list[Pose]:
+    """An object drifting 1.5 px a frame that, for 15 frames, grows 5 % a frame while turning 5 degrees (``zoom``)
+    or turns 20 degrees a frame (``spin``), and then at once shrinks or turns back as fast; 40 frames."""
+    scale, angle, poses = 1.0, 0.0, []
+    for i in range(40):
+        poses.append(Pose(320.0 + 1.5 * i, 240.0 + 0.5 * i, scale, angle))
+        sign = 1 if i < 15 else -1
+        if change == "zoom":
+            scale, angle = scale * 1.05 ** sign, angle + 5.0
+        else:
+            angle += 20.0 * sign
+    return poses
+
+
+@pytest.mark.parametrize("change", ["zoom", "spin"])
+def test_a_predicted_turn_or_zoom_that_reverses_is_matched_unpredicted_too(change):
+    """A predicted turn or zoom that matches worse than the last frame did is matched again from the last scale
+    and angle and from as far on their other side. Without that, the zoom was lost at the reversal in 4 of 6 seeds
+    (0-5), up to 250 % off in scale, where it was tracked before zooms were predicted; the spin in 6 of 6 (5 of 6
+    before spins were predicted). Now every frame is tracked within 1 px, 2 % and 8 degrees."""
+    roi = Ellipse.circle(320, 240, 40)
+    poses = _reversing(change)
+    for seed in range(4):
+        frames = list(synthetic_sequence(poses, roi, size=(640, 480), seed=seed))
+        _, results = run(frames, roi)
+        assert all(ok for ok, _ in results)
+        assert centre_errors(results, poses[1:]).max() <= 1.0
+        assert max(abs(s.scale / p.scale - 1) for (_, s), p in zip(results, poses[1:])) <= 0.02
+        assert max(abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(results, poses[1:])) <= 8.0
 
 
 def test_recovers_after_a_full_occlusion():

@@ -287,11 +287,11 @@ def _half_covered(seed, frames_total=70, first=20, last=50):
     return roi, poses, frames
 
 
-@pytest.mark.parametrize("seed", [7, 12, 14])
+@pytest.mark.parametrize("seed", [7, 13, 14])
 def test_occlusion_mask_hides_the_covered_half_and_recovers(seed):
     """``lpcf-masked`` marks the log-polar sectors facing the cover as hidden and those facing away as visible,
-    and is back on the object once it is uncovered (measured on seeds 6-15: all ten back, within 0.7 px and
-    0.9 degrees; ``lpcf`` without masks stays 2.4-2.5 px off on seeds 12 and 13)."""
+    and is back on the object once it is uncovered (measured on seeds 6-15: all ten back, within 0.6 px; ``lpcf``
+    without masks comes back 1.0, 13 and 2.2 px off on seeds 7, 11 and 13)."""
     roi, poses, frames = _half_covered(seed)
     tracker = create_tracker("lpcf-masked")
     tracker.init(frames[0], roi)
@@ -314,7 +314,7 @@ def test_occlusion_mask_hides_the_covered_half_and_recovers(seed):
     assert np.median(centre_errors(after, truth)) <= 1.0
     assert np.median([abs(s.scale / p.scale - 1) for (_, s), p in zip(after, truth)]) <= 0.02
     assert np.median([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(after, truth)]) <= 1.0
-    if seed == 12:  # without the mask, the cover throws scale and angle off and the tracker comes back off-centre
+    if seed == 13:  # without the mask, the cover throws scale and angle off and the tracker comes back off-centre
         _, unmasked = run(frames, roi, colour_weight=0.0)  # lpcf-masked's colour weight
         assert np.median(centre_errors(unmasked[55:], truth)) > 2.0
 
@@ -606,6 +606,40 @@ def test_a_thin_ellipse_keeps_its_angle(seed, angle_deg):
     within = np.mean(centre_errors(results, poses[1:]) < 0.25 * math.sqrt(roi.a * roi.b))
     assert within >= 0.95
     assert np.median([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(results, poses[1:])]) <= 3.0
+
+
+def _swirling(seed, frames_total=60, turn_deg=3.0):
+    """An ellipse (semi-axes 50 and 32 px, tilted 20 degrees) drifting 1 px a frame without turning, whose central
+    disc (radius 18 px, other texture) turns ``turn_deg`` a frame inside it: a part of the object changing, as a
+    face or a walker does, which the log-polar match, over all of the object and its outline, may read as a turn."""
+    rng = np.random.default_rng(seed)
+    background = random_texture(480, 640, rng)
+    roi = Ellipse(320, 240, 50, 32, 20)
+    size = 123
+    outer, core = (cv2.addWeighted(random_texture(size, size, rng), 0.8, np.full((size, size, 3), 40, np.uint8), 1.0, 0)
+                   for _ in range(2))
+    yy, xx = np.mgrid[:size, :size] - (size - 1) / 2
+    disc = (np.hypot(xx, yy) < 18)[..., None]
+    poses, frames = [], []
+    for i in range(frames_total):
+        turn = cv2.getRotationMatrix2D(((size - 1) / 2, (size - 1) / 2), turn_deg * i, 1.0)
+        texture = np.where(disc, cv2.warpAffine(core, turn, (size, size), borderMode=cv2.BORDER_REFLECT), outer)
+        poses.append(Pose(320 + 1.0 * i, 240 + 0.3 * i, 1.0, 0.0))
+        frame = render_frame(background, texture, roi, poses[-1]).astype(np.float32)
+        frames.append(np.clip(frame + rng.normal(0, 2, frame.shape), 0, 255).astype(np.uint8))
+    return roi, poses, frames
+
+
+def test_a_turn_the_filter_does_not_see_is_undone():
+    """Where the log-polar match is weak, a change of scale or angle that leaves the filter's response less sharp
+    is undone. Here only the object's middle turns: without the rule the estimate turned with it, ending more than
+    20 degrees off in 5 of these 8 seeds (up to 176 degrees) and lost in 3; with it, 1 of 8 (measured)."""
+    off = 0
+    for seed in range(8):
+        roi, poses, frames = _swirling(seed)
+        _, results = run(frames, roi)
+        off += abs(results[-1][1].rotation_deg) > 20.0
+    assert off <= 2
 
 
 def _retextured(seed, frames_total=70):

@@ -7,6 +7,11 @@ each call; decoding, ``init()`` and scoring excluded), reported as frames per se
 
 Summary rows average each per-sequence number over the sequences (every sequence weighs the same, as in OTB's
 overall plots); the summary frames/s is total updated frames over total update time.
+
+With several starts (:func:`start_roi`, ``lptrack bench --starts N``) each sequence is tracked from the ground
+truth's ROI and from up to 12 perturbed ones, OTB's spatial robustness evaluation (SRE; Wu, Lim, Yang, CVPR
+2013): a sequence's row is then the mean over its starts, which says more about a tracker than one run, whose
+score on a hard sequence can swing by a third between starts a few pixels apart.
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ from .errors import OutputError, UsageError
 from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
                        auc, score_track)
 from .executor import run_tasks
+from .geometry import Ellipse
 from .trackers import create_tracker, tracker_class, tracker_names
 from .trackers import opencv as _opencv_peers  # noqa: F401  (registers cv-mil, cv-kcf, cv-csrt)
 
@@ -79,6 +85,33 @@ def resolve_trackers(spec: str | None) -> tuple[list[str], list[tuple[str, str]]
     return available, skipped
 
 
+#: Initial ROIs of the starts, in order: ``(dx, dy, scale)``, shifts as fractions of the ROI's bounding box's width
+#: and height (x right, y down), scale of both semi-axes about the centre. Start 0 is the ground truth's ROI; 1-12
+#: are OTB's SRE perturbations: 4 centre shifts and 4 corner shifts by 10 % of the box, and scales 0.8, 0.9, 1.1
+#: and 1.2.
+STARTS = ((0.0, 0.0, 1.0),
+          (-0.1, 0.0, 1.0), (0.1, 0.0, 1.0), (0.0, -0.1, 1.0), (0.0, 0.1, 1.0),
+          (-0.1, -0.1, 1.0), (0.1, -0.1, 1.0), (-0.1, 0.1, 1.0), (0.1, 0.1, 1.0),
+          (0.0, 0.0, 0.8), (0.0, 0.0, 0.9), (0.0, 0.0, 1.1), (0.0, 0.0, 1.2))
+
+
+def start_roi(roi: Ellipse, start: int) -> Ellipse:
+    """The initial ROI of start number ``start`` (0 to ``len(STARTS) - 1``, see :data:`STARTS`) from the ground
+    truth's ``roi``: moved by a fraction of its axis-aligned bounding box (pixels) and/or scaled about its
+    centre; the angle is kept.
+
+    Raises
+    ------
+    UsageError
+        If ``start`` is out of range.
+    """
+    if not 0 <= start < len(STARTS):
+        raise UsageError(f"start {start} is not one of 0 to {len(STARTS) - 1}")
+    dx, dy, scale = STARTS[start]
+    _, _, width, height = roi.bounding_box()
+    return Ellipse(roi.cx + dx * width, roi.cy + dy * height, roi.a * scale, roi.b * scale, roi.angle_deg)
+
+
 def collect_sequences(datasets: Iterable) -> list[Sequence]:
     """All sequences of the given dataset folders, in order.
 
@@ -102,7 +135,7 @@ def collect_sequences(datasets: Iterable) -> list[Sequence]:
     return sequences
 
 
-def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None) -> dict:
+def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None, start: int = 0) -> dict:
     """Run one tracker over one sequence and score it.
 
     Parameters
@@ -113,11 +146,13 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
         Registered tracker name.
     params : mapping, optional
         ``{"tracker_params": {name: {keyword: value}}}``: keyword tuning passed to the tracker.
+    start : int
+        Which initial ROI (:func:`start_roi`): 0, the ground truth's, or one of OTB's perturbed ones.
 
     Returns
     -------
     dict
-        ``sequence``, ``tracker``, ``frames`` (decoded), ``updates`` (frames passed to ``update``),
+        ``sequence``, ``tracker``, ``start``, ``frames`` (decoded), ``updates`` (frames passed to ``update``),
         ``lost_frames``, ``update_time_s``, ``fps`` (updates per second of update time), ``error`` (None, or
         the message of an exception that stopped the run; then the numbers cover the frames before it), and
         every key of :func:`~logpolar_track.evaluate.score_track`.
@@ -132,12 +167,13 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
     rows: list[tuple] = []
     update_time, updates, lost, error = 0.0, 0, 0, None
     try:
+        roi = start_roi(sequence.roi, start)
         tracker = create_tracker(tracker_name, **tracker_params)
         for index, _time_s, frame in sequence.frames():
             if index < sequence.start:
                 continue
             if index == sequence.start:
-                state, ok = tracker.init(frame, sequence.roi), True
+                state, ok = tracker.init(frame, roi), True
             else:
                 t0 = time.perf_counter()
                 ok, state = tracker.update(frame)
@@ -153,7 +189,7 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
         error = f"{type(exc).__name__}: {exc}"
     table = np.array(rows, float).reshape(-1, 9)
     track = Track(table[:, 0].astype(int), table[:, 1:6], table[:, 6], table[:, 7], table[:, 8])
-    result = {"sequence": sequence.name, "tracker": tracker_name, "frames": len(rows) + sequence.start,
+    result = {"sequence": sequence.name, "tracker": tracker_name, "start": start, "frames": len(rows) + sequence.start,
               "updates": updates, "lost_frames": lost, "update_time_s": update_time,
               "fps": updates / update_time if update_time > 0 else math.nan, "error": error}
     result.update(score_track(sequence.gt, track))
@@ -161,16 +197,20 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
 
 
 def _run_pair(pair: tuple, report=None) -> dict:
-    """:func:`run_one` as an :mod:`~logpolar_track.executor` task: ``pair`` is (sequence, tracker, params)."""
+    """:func:`run_one` as an :mod:`~logpolar_track.executor` task: ``pair`` is (sequence, tracker, params,
+    start)."""
     return run_one(*pair)
 
 
 def run_bench(sequences: list[Sequence], trackers: list[str], *, params: Mapping | None = None, jobs: int = 1,
-              scheduler=None, on_result: Callable[[dict], None] | None = None) -> list[dict]:
+              scheduler=None, on_result: Callable[[dict], None] | None = None, starts: int = 1) -> list[dict]:
     """Run every tracker on every sequence; results in (sequence, tracker) order whatever ``jobs`` is.
 
     Parameters
     ----------
+    starts : int
+        Initial ROIs per sequence (1 to ``len(STARTS)``, see :func:`start_roi`): each (sequence, tracker) pair is
+        run from the first ``starts`` of them, and its result is their mean (:func:`mean_over_starts`).
     jobs : int
         Worker processes, a fresh one per pair (:func:`~logpolar_track.executor.run_tasks`); 1 runs in this
         process. Several jobs share the CPU, so frames/s figures are only comparable between runs with the
@@ -181,21 +221,54 @@ def run_bench(sequences: list[Sequence], trackers: list[str], *, params: Mapping
     on_result : callable, optional
         Called with each result as it completes (progress display).
     """
-    pairs = [(s, t, params) for s in sequences for t in trackers]
-    results: list[dict | None] = [None] * len(pairs)
+    if not 1 <= starts <= len(STARTS):
+        raise UsageError(f"starts must be 1 to {len(STARTS)}, got {starts}")
+    pairs = [(s, t, params, k) for s in sequences for t in trackers for k in range(starts)]
+    runs: list[dict | None] = [None] * len(pairs)
     for outcome in run_tasks(_run_pair, pairs, jobs=jobs, scheduler=scheduler):
-        sequence, tracker, _ = pairs[outcome.index]
+        sequence, tracker, _, start = pairs[outcome.index]
         # run_one reports its own failures; a worker that died reports here, as a failed pair without frames.
-        result = outcome.value if outcome.ok else _failed_pair(sequence, tracker, outcome.error)
-        results[outcome.index] = result
+        result = outcome.value if outcome.ok else _failed_pair(sequence, tracker, outcome.error, start)
+        runs[outcome.index] = result
         if on_result:
             on_result(result)
-    return results
+    if starts == 1:
+        return runs
+    return [mean_over_starts(runs[i:i + starts]) for i in range(0, len(runs), starts)]
 
 
-def _failed_pair(sequence: Sequence, tracker: str, error: str) -> dict:
-    result = {"sequence": sequence.name, "tracker": tracker, "frames": 0, "updates": 0, "lost_frames": 0,
-              "update_time_s": 0.0, "fps": math.nan, "error": error}
+#: Per-run numbers that :func:`mean_over_starts` averages (the rest are summed, or kept from the first run).
+_MEAN_KEYS = ("success_rate", "auc", "iou_mean", "precision_20", "centre_error_median_px", "scale_error_median_pct",
+              "rotation_error_median_deg")
+
+
+def mean_over_starts(runs: list[dict]) -> dict:
+    """One result from the runs of a (sequence, tracker) pair from several starts: the mean of each score and
+    curve over the runs that scored frames, updates, lost frames and update time summed (frames/s over all the
+    runs), ``starts`` (how many runs) and ``auc_per_start``; the frame counts and per-frame arrays are the first
+    run's (the ground truth's start). ``error`` is the first failed run's, naming its start."""
+    merged = dict(runs[0])
+    scored = [r for r in runs if r["frames_scored"]]
+    for key in _MEAN_KEYS:
+        value = _mean(r[key] for r in scored)
+        if value is not None:  # else the first run's undefined value stands (None or NaN, as score_track gives)
+            merged[key] = value
+    for key in ("success_curve", "precision_curve"):
+        if scored:
+            merged[key] = np.mean([r[key] for r in scored], axis=0).tolist()
+    for key in ("updates", "lost_frames", "update_time_s"):
+        merged[key] = sum(r[key] for r in runs)
+    merged["fps"] = merged["updates"] / merged["update_time_s"] if merged["update_time_s"] > 0 else math.nan
+    merged["starts"] = len(runs)
+    merged["auc_per_start"] = [r["auc"] for r in runs]
+    failed = [r for r in runs if r["error"]]
+    merged["error"] = f"start {failed[0]['start']}: {failed[0]['error']}" if failed else None
+    return merged
+
+
+def _failed_pair(sequence: Sequence, tracker: str, error: str, start: int = 0) -> dict:
+    result = {"sequence": sequence.name, "tracker": tracker, "start": start, "frames": 0, "updates": 0,
+              "lost_frames": 0, "update_time_s": 0.0, "fps": math.nan, "error": error}
     result.update(score_track(sequence.gt, Track(np.zeros(0, int), np.zeros((0, 5)), np.zeros(0), np.zeros(0),
                                                  np.zeros(0))))
     return result
@@ -442,6 +515,6 @@ def eval_document(pred_path, gt_path, metrics: dict, *, per_frame: bool = True) 
                    "precision_px": PRECISION_PX, "metrics": kept})
 
 
-__all__ = ["run_one", "run_bench", "summarise", "format_table", "bench_document", "eval_document",
+__all__ = ["run_one", "run_bench", "mean_over_starts", "start_roi", "STARTS", "summarise", "format_table", "bench_document", "eval_document",
            "plot_curves", "resolve_trackers", "collect_sequences", "default_dataset", "write_text_atomic",
            "matplotlib_missing", "environment", "SCHEMA_VERSION"]

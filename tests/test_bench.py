@@ -16,7 +16,8 @@ import cv2
 import pytest
 from click.testing import CliRunner
 
-from logpolar_track.bench import run_bench, run_one
+from logpolar_track.bench import run_bench, run_one, start_roi
+from logpolar_track.errors import UsageError
 from logpolar_track.cli import main
 from logpolar_track.datasets import discover
 from logpolar_track.geometry import Ellipse
@@ -153,6 +154,47 @@ def test_bench_on_a_dask_cluster_gives_the_same_numbers(dataset):
     for a, b in zip(local_doc["results"], remote_doc["results"]):
         assert (a["sequence"], a["auc"], a["centre_error_median_px"]) == (b["sequence"], b["auc"],
                                                                          b["centre_error_median_px"])
+
+
+def test_start_rois_are_otbs_spatial_robustness_starts():
+    """Start 0 is the ground truth's ROI; 1-8 shift it by 10 % of its bounding box (sides, then corners), 9-12
+    scale it by 0.8, 0.9, 1.1 and 1.2 about its centre (OTB's SRE), keeping its angle."""
+    roi = Ellipse(100.0, 80.0, 20.0, 10.0, 0.0)  # bounding box 40 x 20 px
+    assert start_roi(roi, 0) == roi
+    centres = [start_roi(roi, k).centre for k in range(1, 9)]
+    assert centres == [pytest.approx(c) for c in [(96, 80), (104, 80), (100, 78), (100, 82),
+                                                  (96, 78), (104, 78), (96, 82), (104, 82)]]
+    assert [(start_roi(roi, k).a, start_roi(roi, k).b) for k in range(9, 13)] == [
+        pytest.approx((16, 8)), pytest.approx((18, 9)), pytest.approx((22, 11)), pytest.approx((24, 12))]
+    tilted = Ellipse(100.0, 80.0, 20.0, 10.0, 90.0)  # axis a upright: bounding box 20 x 40 px
+    moved = start_roi(tilted, 8)
+    assert moved.centre == pytest.approx((102, 84)) and moved.angle_deg == 90.0
+    with pytest.raises(UsageError, match="start 13 is not one of 0 to 12"):
+        start_roi(roi, 13)
+
+
+def test_bench_from_several_starts_gives_their_mean(dataset):
+    seqs = discover(dataset)
+    [single] = run_bench(seqs[:1], ["fixed"])
+    [merged] = run_bench(seqs[:1], ["fixed"], starts=3, jobs=2)
+    assert merged["starts"] == 3 and len(merged["auc_per_start"]) == 3
+    assert merged["auc_per_start"][0] == single["auc"]  # start 0 is the plain run
+    assert merged["auc"] == pytest.approx(sum(merged["auc_per_start"]) / 3)
+    assert merged["frames_scored"] == N_FRAMES and merged["updates"] == 3 * (N_FRAMES - 1)
+    res = _run("bench", "--dataset", dataset, "--trackers", "fixed", "--starts", "3", "--json", "-", "-q")
+    assert res.exit_code == 0, res.stderr
+    doc = json.loads(res.stdout)
+    assert doc["parameters"]["starts"] == 3 and len(doc["parameters"]["start_perturbations"]) == 3
+    assert [r["starts"] for r in doc["results"]] == [3, 3]
+    assert doc["results"][0]["auc"] == pytest.approx(merged["auc"])
+    assert res.stderr.startswith("Means over 3 starts per sequence")
+
+
+@pytest.mark.parametrize("args, message", [(["--starts", "14"], "1<=x<=13"),
+                                           (["--starts", "2", "--speed"], "no --dataset, --per-frame, --plot or --starts")])
+def test_bad_starts_are_usage_errors(dataset, args, message):
+    res = _run("bench", "--trackers", "fixed", *args)
+    assert res.exit_code == 2 and message in res.stderr and res.stdout == ""
 
 
 def test_unknown_tracker_is_a_usage_error(dataset):

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from ..bench import (bench_document, collect_sequences, default_dataset, eval_document, format_table,
+from ..bench import (STARTS, bench_document, collect_sequences, default_dataset, eval_document, format_table,
                      matplotlib_missing, plot_curves, resolve_trackers, run_bench, summarise, write_text_atomic)
 from ..errors import UsageError
 from . import EXIT_FAILURE, OneLineErrors, main
@@ -42,6 +42,7 @@ Examples:
   lptrack bench
   lptrack bench --dataset ~/data/otb --trackers fixed,cv-mil --json res.json
   lptrack bench --trackers cv-csrt,cv-kcf --json - > res.json
+  lptrack bench --dataset ~/data/otb --trackers lpcf,cv-csrt --starts 13 -j 2
 """
 
 
@@ -62,13 +63,17 @@ Examples:
 @click.option("--scheduler", metavar="ADDRESS",
               help="Run the pairs on this Dask scheduler instead (pip install 'dask[distributed]'; the sequences "
                    "at the same paths on its workers).")
+@click.option("--starts", type=click.IntRange(min=1, max=len(STARTS)), default=1, show_default=True, metavar="N",
+              help=f"Track each sequence from N initial ROIs: the ground truth's, then OTB's spatial robustness "
+                   f"(SRE) ones: shifted by 10 % of the box (4 to the sides, 4 to the corners), scaled by 0.8, "
+                   f"0.9, 1.1, 1.2 (at most {len(STARTS)}). Each row is the mean over its starts.")
 @click.option("--speed", is_flag=True,
               help="Time the trackers instead (thesis Table 4.1 on a 640x480 synthetic video, one core) with "
                    "decode and 'lptrack run' baselines; uses --trackers, --json and --quiet only. "
                    "LPTRACK_SPEED_FRAMES sets the frames per sequence (default 100).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no notes on stderr.")
 def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None, per_frame: bool,
-          plot_out: Path | None, jobs: int, scheduler: str | None, quiet: bool, speed: bool) -> None:
+          plot_out: Path | None, jobs: int, scheduler: str | None, starts: int, quiet: bool, speed: bool) -> None:
     """Run trackers over sequences with ground truth and compare them.
 
     Prints one row per sequence and tracker and a mean row per tracker:
@@ -80,9 +85,9 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
     with and without video output as a share of them.
     """
     if speed:
-        if datasets or per_frame or plot_out is not None:
-            raise UsageError("--speed times trackers on a synthetic video; it takes no --dataset, --per-frame "
-                             "or --plot")
+        if datasets or per_frame or plot_out is not None or starts != 1:
+            raise UsageError("--speed times trackers on a synthetic video; it takes no --dataset, --per-frame, "
+                             "--plot or --starts")
         _speed(trackers, json_out, quiet)
         return
     if plot_out is not None:
@@ -104,7 +109,7 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
     if show_progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=len(sequences) * len(names), unit="run", file=sys.stderr, leave=False)
+        bar = tqdm(total=len(sequences) * len(names) * starts, unit="run", file=sys.stderr, leave=False)
 
     def progress(result: dict) -> None:
         if bar is not None:
@@ -112,17 +117,19 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
             bar.update(1)
 
     try:
-        results = run_bench(sequences, names, jobs=jobs, scheduler=scheduler, on_result=progress)
+        results = run_bench(sequences, names, jobs=jobs, scheduler=scheduler, on_result=progress, starts=starts)
     finally:
         if bar is not None:
             bar.close()
     summary = summarise(results, names)
     table = format_table(results, summary)
     parameters = {"datasets": [str(d) for d in datasets], "trackers": names, "jobs": jobs,
-                  "scheduler": scheduler}
+                  "scheduler": scheduler, "starts": starts, "start_perturbations": [list(p) for p in STARTS[:starts]]}
     failed = [r for r in results if r["error"]]
     doc = None if json_out is None else bench_document(results, summary, sequences, parameters=parameters,
                                                        skipped=skipped, per_frame=per_frame)
+    if starts > 1:
+        table = f"Means over {starts} starts per sequence (--starts; per-start AUCs in --json).\n" + table
     _emit(table, doc, json_out)
     if plot_out is not None:
         plot_curves(summary, plot_out)

@@ -27,7 +27,7 @@ def _is_peer(name):
 
 #: Every registered tracker of lptrack's own held to the same bounds (new ones are covered automatically);
 #: `spatial` is bounded by its grid and has its own test.
-#: Trackers marked ``meets_thesis_bounds = False`` are tested in their own files (e.g. tests/test_lpcf.py).
+#: A tracker marked ``meets_thesis_bounds = False`` would be tested in its own file instead (none is now).
 ACCURATE = sorted(set(THESIS) | {n for n in tracker_names() if not _is_peer(n) and n != "spatial"
                                  and getattr(tracker_class(n), "meets_thesis_bounds", True)},
                   key=lambda n: (n not in THESIS, n))

@@ -189,9 +189,9 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
         error = f"{type(exc).__name__}: {exc}"
     table = np.array(rows, float).reshape(-1, 9)
     track = Track(table[:, 0].astype(int), table[:, 1:6], table[:, 6], table[:, 7], table[:, 8])
-    result = {"sequence": sequence.name, "tracker": tracker_name, "start": start, "frames": len(rows) + sequence.start,
-              "updates": updates, "lost_frames": lost, "update_time_s": update_time,
-              "fps": updates / update_time if update_time > 0 else math.nan, "error": error}
+    result = {"sequence": sequence.name, "tracker": tracker_name, "start": start,
+              "frames": len(rows) + sequence.start, "updates": updates, "lost_frames": lost,
+              "update_time_s": update_time, "fps": updates / update_time if update_time > 0 else math.nan, "error": error}
     result.update(score_track(sequence.gt, track))
     return result
 
@@ -515,6 +515,6 @@ def eval_document(pred_path, gt_path, metrics: dict, *, per_frame: bool = True) 
                    "precision_px": PRECISION_PX, "metrics": kept})
 
 
-__all__ = ["run_one", "run_bench", "mean_over_starts", "start_roi", "STARTS", "summarise", "format_table", "bench_document", "eval_document",
-           "plot_curves", "resolve_trackers", "collect_sequences", "default_dataset", "write_text_atomic",
-           "matplotlib_missing", "environment", "SCHEMA_VERSION"]
+__all__ = ["run_one", "run_bench", "mean_over_starts", "start_roi", "STARTS", "summarise", "format_table",
+           "bench_document", "eval_document", "plot_curves", "resolve_trackers", "collect_sequences",
+           "default_dataset", "write_text_atomic", "matplotlib_missing", "environment", "SCHEMA_VERSION"]

@@ -190,8 +190,9 @@ def test_bench_from_several_starts_gives_their_mean(dataset):
     assert res.stderr.startswith("Means over 3 starts per sequence")
 
 
-@pytest.mark.parametrize("args, message", [(["--starts", "14"], "1<=x<=13"),
-                                           (["--starts", "2", "--speed"], "no --dataset, --per-frame, --plot or --starts")])
+@pytest.mark.parametrize("args, message", [
+    (["--starts", "14"], "1<=x<=13"),
+    (["--starts", "2", "--speed"], "no --dataset, --per-frame, --plot or --starts")])
 def test_bad_starts_are_usage_errors(dataset, args, message):
     res = _run("bench", "--trackers", "fixed", *args)
     assert res.exit_code == 2 and message in res.stderr and res.stdout == ""

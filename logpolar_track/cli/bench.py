@@ -124,7 +124,8 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
     summary = summarise(results, names)
     table = format_table(results, summary)
     parameters = {"datasets": [str(d) for d in datasets], "trackers": names, "jobs": jobs,
-                  "scheduler": scheduler, "starts": starts, "start_perturbations": [list(p) for p in STARTS[:starts]]}
+                  "scheduler": scheduler, "starts": starts,
+                  "start_perturbations": [list(p) for p in STARTS[:starts]]}
     failed = [r for r in results if r["error"]]
     doc = None if json_out is None else bench_document(results, summary, sequences, parameters=parameters,
                                                        skipped=skipped, per_frame=per_frame)

@@ -235,7 +235,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         cover in 15 / 11 of 16 runs against 12 / 9 (``lpcf-masked`` 14 / 13 against 14 / 9); the 7 real
         sequences' mean IoU AUC over OTB's 13 SRE starts 0.438 -> 0.444, over 32 starts 0.469 -> 0.471 (toy 0.560
         -> 0.638, crossing 0.708 -> 0.656); sample_videos unchanged (0.951). 0.5 / 0.7 and 0.6 / 0.8: 0.470 and
-        0.474 over 32 starts, the zoom-and-turn path 23 of 24 at 0.6 / 0.8.
+        0.474 over 32 starts, the zoom-and-turn path 23 of 24 at 0.6 / 0.8. Without the filter's judgement 0.4 /
+        0.6 costs the real sequences: 0.407 over the 13 starts, 0.430 over 32.
     """
 
     name = "lpcf"
@@ -1352,7 +1353,7 @@ _PREDICTED_KEPT = 0.95
 #: by up to 10 %), with ``trust_low`` 0.4: 0.5 -> 0.444 / 0.471; 0.6 -> 0.440 (13 starts); 0.7 -> 0.450 / 0.475; 0.8 ->
 #: 0.456 / 0.478 (crossing 0.584 -> 0.699 / 0.656 -> 0.725: a pedestrian's matches are 0.4-0.6); every match 0.451
 #: / 0.476. Not 0.7 or above: a disc spinning 20 degrees a frame from the first frame is then lost in 2 of 8 seeds
-#: (1 at 0.5: its first turn, unpredicted, is read in part, at a match of 0.65, and undone), and judging changes
+#: against 1 (its first turn, not yet predicted, is read in part, at a match of 0.65, and undone), and judging changes
 #: over half the motion prior's width only under 0.5 gave back crossing's loss (0.443 / 0.476), as did undoing a
 #: change at 0.5-0.8 only where the PSR fell by 10 % (0.448 / 0.476). With ``trust_low`` 0.7, judging every match
 #: lost a spin of 20 degrees a frame that reverses at once in 1 of 6 seeds.

@@ -191,7 +191,8 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
     track = Track(table[:, 0].astype(int), table[:, 1:6], table[:, 6], table[:, 7], table[:, 8])
     result = {"sequence": sequence.name, "tracker": tracker_name, "start": start,
               "frames": len(rows) + sequence.start, "updates": updates, "lost_frames": lost,
-              "update_time_s": update_time, "fps": updates / update_time if update_time > 0 else math.nan, "error": error}
+              "update_time_s": update_time, "fps": updates / update_time if update_time > 0 else math.nan,
+              "error": error}
     result.update(score_track(sequence.gt, track))
     return result
 

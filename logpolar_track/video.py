@@ -532,8 +532,10 @@ class VideoWriter:
         """Stop writing and delete the temporary file; nothing is left behind. Safe to call more than once."""
         self._closed = True
         try:
-            if self._writer is not None:
+            # A stop signal may land in _open between the writer and its encoder being set: either may be unset.
+            if self._encoder is not None:
                 self._encoder.finish(discard=True)
+            if self._writer is not None:
                 self._writer.release()
                 self._writer = None
         finally:  # even if a second Ctrl-C interrupts the wait for the encoder

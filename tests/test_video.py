@@ -170,6 +170,22 @@ def test_writer_round_trip_keeps_count_size_and_fps(tiny_video, tmp_path, name, 
     assert fps == pytest.approx(29.97, abs=0.01)
 
 
+def test_a_stop_while_the_writer_opens_leaves_nothing(tmp_path, monkeypatch):
+    """A stop signal (raised as an exception by lptrack's handlers) can land between the OpenCV writer opening and
+    its encoding thread starting; abort() then had a writer without an encoder, failed with AttributeError, and
+    the run exited 1 instead of 143 (seen once in CI)."""
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(video_module, "_Encoder", interrupted)
+    writer = VideoWriter(tmp_path / "out.mp4", 25.0)
+    with pytest.raises(KeyboardInterrupt):
+        writer.write(np.zeros((48, 64, 3), np.uint8))
+    writer.abort()
+    writer.abort()  # safe to repeat
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_writer_abort_on_exception_leaves_nothing(tiny_video, tmp_path):
     with pytest.raises(KeyboardInterrupt):
         with VideoWriter(tmp_path / "out.mp4", 30.0) as writer:

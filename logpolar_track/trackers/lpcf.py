@@ -20,7 +20,7 @@ Per frame:
    that stopped or bounced back), and the sharpest response is kept.
 3. **Scale and rotate**: sample a log-polar image over the object's ellipse, enlarged 1.6 times to take in its
    outline, at the new centre and phase-correlate it with the log-polar appearance model: the peak's shift
-   gives the change of scale and rotation, shrunk by a motion prior unless the match is clear (0.4 and up).
+   gives the change of scale and rotation, shrunk by a motion prior, less from a match of 0.4, not at all from 0.6.
    Because step 2 worked in the object's frame, translation no longer corrupts this step, and because this
    step keeps the frame aligned, the filter in step 2 sees an upright, constant-size object. A change read by
    a weak match (under 0.5) stands only if the filter, correlated again at the new scale and angle, answers

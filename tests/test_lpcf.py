@@ -31,6 +31,22 @@ def centre_errors(results, poses):
     return np.array([math.hypot(s.centre[0] - p.cx, s.centre[1] - p.cy) for (_, s), p in zip(results, poses)])
 
 
+def scale_errors(results, poses):
+    """``|scale / true scale - 1|`` per frame."""
+    return np.array([abs(s.scale / p.scale - 1) for (_, s), p in zip(results, poses)])
+
+
+def rotation_errors(results, poses):
+    """``|rotation - true rotation|`` per frame, degrees (unwrapped, both cumulative)."""
+    return np.array([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(results, poses)])
+
+
+def runs_on_seeds(roi, poses, seeds=range(4)):
+    """``lpcf``'s results on ``poses`` of ``roi`` rendered at 640 x 480 with each of ``seeds``, one list at a time."""
+    for seed in seeds:
+        yield run(list(synthetic_sequence(poses, roi, size=(640, 480), seed=seed)), roi)[1]
+
+
 def test_is_the_default():
     assert DEFAULT_TRACKER == "lpcf"
 
@@ -157,9 +173,7 @@ def test_an_object_bouncing_back_is_looked_for_where_it_was_and_behind(speed_px)
     as the prediction was ahead."""
     roi = Ellipse.circle(80, 240, 30)
     poses = _bounce(speed_px)
-    for seed in range(4):
-        frames = list(synthetic_sequence(poses, roi, size=(640, 480), seed=seed))
-        _, results = run(frames, roi)
+    for results in runs_on_seeds(roi, poses):
         assert all(ok for ok, _ in results)
         assert centre_errors(results, poses[1:]).max() <= 3.0
 
@@ -185,12 +199,10 @@ def test_a_fast_spin_is_predicted(kind):
     read only in part: 14 of 20 degrees)."""
     roi = Ellipse.circle(320, 240, 40)
     poses = _spinning(kind)
-    for seed in range(4):
-        frames = list(synthetic_sequence(poses, roi, size=(640, 480), seed=seed))
-        _, results = run(frames, roi)
+    for results in runs_on_seeds(roi, poses):
         assert all(ok for ok, _ in results)
         assert centre_errors(results, poses[1:]).max() <= 2.0
-        angle_errors = np.array([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(results, poses[1:])])
+        angle_errors = rotation_errors(results, poses[1:])
         assert np.median(angle_errors) <= 2.0 and angle_errors.max() <= 8.0
 
 
@@ -212,12 +224,10 @@ def test_a_fast_zoom_is_predicted(rate, radius, frames_total):
     seeds, up to 150 % off in scale. Every frame is tracked now, within 1 px and 2 % of the size."""
     roi = Ellipse.circle(320, 240, radius)
     poses = _zooming(rate, frames_total)
-    for seed in range(4):
-        frames = list(synthetic_sequence(poses, roi, size=(640, 480), seed=seed))
-        _, results = run(frames, roi)
+    for results in runs_on_seeds(roi, poses):
         assert all(ok for ok, _ in results)
         assert centre_errors(results, poses[1:]).max() <= 1.0
-        assert max(abs(s.scale / p.scale - 1) for (_, s), p in zip(results, poses[1:])) <= 0.02
+        assert scale_errors(results, poses[1:]).max() <= 0.02
 
 
 def _reversing(change: str) -> list[Pose]:
@@ -242,13 +252,11 @@ def test_a_predicted_turn_or_zoom_that_reverses_is_matched_unpredicted_too(chang
     before spins were predicted). Now every frame is tracked within 1 px, 2 % and 8 degrees."""
     roi = Ellipse.circle(320, 240, 40)
     poses = _reversing(change)
-    for seed in range(4):
-        frames = list(synthetic_sequence(poses, roi, size=(640, 480), seed=seed))
-        _, results = run(frames, roi)
+    for results in runs_on_seeds(roi, poses):
         assert all(ok for ok, _ in results)
         assert centre_errors(results, poses[1:]).max() <= 1.0
-        assert max(abs(s.scale / p.scale - 1) for (_, s), p in zip(results, poses[1:])) <= 0.02
-        assert max(abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(results, poses[1:])) <= 8.0
+        assert scale_errors(results, poses[1:]).max() <= 0.02
+        assert rotation_errors(results, poses[1:]).max() <= 8.0
 
 
 def test_recovers_after_a_full_occlusion():
@@ -313,8 +321,8 @@ def test_occlusion_mask_hides_the_covered_half_and_recovers(seed):
     truth = poses[56:]
     assert all(ok for ok, _ in after)
     assert np.median(centre_errors(after, truth)) <= 1.0
-    assert np.median([abs(s.scale / p.scale - 1) for (_, s), p in zip(after, truth)]) <= 0.02
-    assert np.median([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(after, truth)]) <= 1.0
+    assert np.median(scale_errors(after, truth)) <= 0.02
+    assert np.median(rotation_errors(after, truth)) <= 1.0
 
 
 def test_redetection_does_not_jump_to_a_patch_of_background():
@@ -602,7 +610,7 @@ def test_a_thin_ellipse_keeps_its_angle(seed, angle_deg):
     _, results = run(frames, roi)
     within = np.mean(centre_errors(results, poses[1:]) < 0.25 * math.sqrt(roi.a * roi.b))
     assert within >= 0.95
-    assert np.median([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(results, poses[1:])]) <= 3.0
+    assert np.median(rotation_errors(results, poses[1:])) <= 3.0
 
 
 def _swirling(seed, frames_total=60, turn_deg=3.0):
@@ -700,13 +708,11 @@ def test_accuracy_on_a_gentle_similarity_path():
     _, results = run(frames, roi)
     truth = poses[1:]
     errors = centre_errors(results, truth)
-    scale_errors = np.array([abs(s.scale / p.scale - 1) for (_, s), p in zip(results, truth)])
-    rotation_errors = np.array([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(results, truth)])
     assert all(ok for ok, _ in results)
     assert np.mean(errors < 0.25 * roi.radius * np.array([p.scale for p in truth])) >= 0.98
     assert np.median(errors) <= 1.0
-    assert np.median(scale_errors) <= 0.015
-    assert np.median(rotation_errors) <= 0.5
+    assert np.median(scale_errors(results, truth)) <= 0.015
+    assert np.median(rotation_errors(results, truth)) <= 0.5
 
 
 def test_gradient_refinement_sharpens_a_rigid_object():
@@ -728,8 +734,7 @@ def test_gradient_refinement_sharpens_a_rigid_object():
             distances.append(tracker.diagnostics["appearance_distance"])
         assert all(ok for ok, _ in results)
         medians[steps] = (np.median(centre_errors(results, truth)),
-                          np.median([abs(s.scale / p.scale - 1) for (_, s), p in zip(results, truth)]),
-                          np.median([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(results, truth)]))
+                          np.median(scale_errors(results, truth)), np.median(rotation_errors(results, truth)))
     refined, plain = medians[2], medians[0]
     assert refined[0] <= 0.1 and refined[1] <= 0.003 and refined[2] <= 0.05
     assert refined[0] < 0.5 * plain[0] and refined[2] < 0.5 * plain[2] and refined[1] <= 1.05 * plain[1]

@@ -609,13 +609,11 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         kept = self._last_sample, self._lp_sample
         for scale, angle in ((last.scale, last.rotation_deg),
                              (last.scale * math.exp(-self.zoom), last.rotation_deg - self.spin_deg)):
-            saved = self._last_sample, self._lp_sample
             moved, psr, peak = self._translate(frame, Similarity(predicted.cx, predicted.cy, scale, angle,
                                                                  predicted.score))
             turned, lp_height = self._scale_rotate(frame, moved)
             if lp_height > max(best[4], _PREDICTED_MIN_MATCH):
                 best, kept = (moved, psr, peak, turned, lp_height), (self._last_sample, self._lp_sample)
-            self._last_sample, self._lp_sample = saved
             if best[4] >= _PREDICTED_KEPT * last_match:
                 break
         self._last_sample, self._lp_sample = kept

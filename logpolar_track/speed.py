@@ -363,6 +363,10 @@ def _verdict(met: bool | None, text: str) -> str:
     return "-" if met is None else f"{text}: {'met' if met else 'NOT met'}"
 
 
+def _with_extensions(extensions: str | None) -> str:
+    return f" ({extensions})" if extensions else ""
+
+
 def format_report(doc: dict) -> str:
     """The report of :func:`speed_report` as two Markdown tables (trackers, then end to end) and notes."""
     lines = ["| tracker | circle ms/frame (fps) | ellipse ms/frame (fps) | thesis circle / ellipse s/frame "
@@ -405,7 +409,8 @@ def format_report(doc: dict) -> str:
     lines += ["", core + ".",
               f"Tracker: median update() on decoded frames, least of {doc['parameters']['repeats']} passes; "
               f"end to end: least of {e['repeats']} runs, decoding in the reader's background thread.",
-              f"Machine: {m['cpu_model']}, {m['cpu_count']} logical CPUs; Python {v['python']}, "
+              f"Machine: {m['cpu_model']}{_with_extensions(m.get('vector_extensions'))}, {m['cpu_count']} logical "
+              f"CPUs; Python {v['python']}, "
               f"OpenCV {v['opencv']} ({v['opencv_package']}), NumPy {v['numpy']}, lptrack {v['lptrack']}."]
     return "\n".join(lines) + "\n"
 

@@ -94,6 +94,7 @@ def test_bench_end_to_end_json(dataset, oracle, tmp_path):
     assert doc["schema_version"] == 1 and doc["tool"] == "lptrack bench"
     assert set(doc["versions"]) >= {"lptrack", "python", "numpy", "opencv"}
     assert doc["machine"]["cpu_count"] >= 1
+    assert doc["machine"]["vector_extensions"] in {None, "AVX-512", "AVX2", "AVX", "SSE4.2", "NEON"}
     assert doc["parameters"]["trackers"] == ["fixed", "cv-mil", oracle]
     assert [s["name"] for s in doc["sequences"]] == ["alpha", "beta"]
     pairs = [(r["sequence"], r["tracker"]) for r in doc["results"]]
@@ -154,6 +155,22 @@ def test_bench_on_a_dask_cluster_gives_the_same_numbers(dataset):
     for a, b in zip(local_doc["results"], remote_doc["results"]):
         assert (a["sequence"], a["auc"], a["centre_error_median_px"]) == (b["sequence"], b["auc"],
                                                                          b["centre_error_median_px"])
+
+
+@pytest.mark.parametrize("cpuinfo, expected", [
+    ("processor\t: 0\nflags\t\t: fpu sse4_2 avx avx2 fma avx512f avx512bw\n", "AVX-512"),
+    ("processor\t: 0\nflags\t\t: fpu sse4_2 avx avx2 fma\n", "AVX2"),
+    ("processor\t: 0\nFeatures\t: fp asimd evtstrm aes\n", "NEON"),
+    ("processor\t: 0\nflags\t\t: fpu mmx\n", None),
+    (None, None),  # no /proc/cpuinfo
+])
+def test_vector_extensions_name_the_widest_the_cpu_reports(tmp_path, cpuinfo, expected):
+    from logpolar_track.bench import vector_extensions
+
+    fake = tmp_path / "cpuinfo"
+    if cpuinfo is not None:
+        fake.write_text(cpuinfo)
+    assert vector_extensions(fake) == expected
 
 
 def test_start_rois_are_otbs_spatial_robustness_starts():

@@ -108,6 +108,10 @@ def test_format_report_marks_missing_figures_and_verdicts():
     assert peer.endswith("| - | - | - |")  # no thesis figure, no speed-up, no target
     assert "| run --no-video (lpcf) | 4.00 | 250 | 25% of decode only | >= 50% of decode only: NOT met |" in text
     assert "| run with video (lpcf) | 3.00 | 333 | 67% of decode + encode | >= 50% of decode + encode: met |" in text
+    assert "Machine: cpu, 2 logical CPUs;" in text  # no vector extensions known: nothing in brackets
+    doc = _doc(rows)
+    doc["machine"]["vector_extensions"] = "AVX2"
+    assert "Machine: cpu (AVX2), 2 logical CPUs;" in format_report(doc)
 
 
 @pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="no thread affinity on this platform")

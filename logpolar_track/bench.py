@@ -393,7 +393,7 @@ def environment() -> dict:
 _VECTOR_FLAGS = (("avx512f", "AVX-512"), ("avx2", "AVX2"), ("avx", "AVX"), ("sse4_2", "SSE4.2"), ("asimd", "NEON"))
 
 
-def vector_extensions(cpuinfo="/proc/cpuinfo") -> str | None:
+def vector_extensions(cpuinfo: str | os.PathLike = "/proc/cpuinfo") -> str | None:
     """The widest vector instruction set the CPU reports in ``cpuinfo`` (``'AVX-512'``, ``'AVX2'``, ...
     ``'NEON'``), or None where it does not say (or there is no such file, as off Linux). Speeds depend on more
     than this: two virtual machines both named "AMD EPYC", with and without AVX-512, ran lptrack's trackers about

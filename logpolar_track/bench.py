@@ -393,20 +393,26 @@ def environment() -> dict:
 _VECTOR_FLAGS = (("avx512f", "AVX-512"), ("avx2", "AVX2"), ("avx", "AVX"), ("sse4_2", "SSE4.2"), ("asimd", "NEON"))
 
 
+def cpuinfo_value(prefixes: tuple[str, ...], cpuinfo: str | os.PathLike = "/proc/cpuinfo") -> str | None:
+    """The text after ``:`` on the first line of ``cpuinfo`` that starts with one of ``prefixes`` (e.g.
+    ``("model name",)``), stripped; None if there is no such line or no such file (as off Linux)."""
+    try:
+        with open(cpuinfo, encoding="utf-8") as f:
+            for line in f:
+                if line.startswith(prefixes):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return None
+
+
 def vector_extensions(cpuinfo: str | os.PathLike = "/proc/cpuinfo") -> str | None:
     """The widest vector instruction set the CPU reports in ``cpuinfo`` (``'AVX-512'``, ``'AVX2'``, ...
     ``'NEON'``), or None where it does not say (or there is no such file, as off Linux). Speeds depend on more
     than this: two virtual machines both named "AMD EPYC", with and without AVX-512, ran lptrack's trackers about
     three times apart and OpenCV's CSRT 1.5-2 times apart."""
-    try:
-        with open(cpuinfo, encoding="utf-8") as f:
-            for line in f:
-                if line.startswith(("flags", "Features")):
-                    flags = set(line.split(":", 1)[1].split())
-                    return next((name for flag, name in _VECTOR_FLAGS if flag in flags), None)
-    except OSError:
-        pass
-    return None
+    flags = set((cpuinfo_value(("flags", "Features"), cpuinfo) or "").split())
+    return next((name for flag, name in _VECTOR_FLAGS if flag in flags), None)
 
 
 def _clean(value):

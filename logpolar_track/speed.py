@@ -262,14 +262,9 @@ def _row(name: str, circle_ms: float, ellipse_ms: float, cpu_per_wall: float) ->
 
 
 def _cpu_model() -> str:
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
+    from .bench import cpuinfo_value
+
+    return cpuinfo_value(("model name",)) or platform.processor() or platform.machine()
 
 
 def speed_report(trackers: list[str] | None = None, *, n_frames: int = 100, repeats: int = 3,

@@ -1,0 +1,111 @@
+"""A one-dimensional correlation filter over sizes: DSST's scale filter.
+
+The object is sampled at ``n_scales`` sizes around a given one, geometrically spaced by ``scale_step``; each
+sample's features make one row of an ``(n_scales, D)`` matrix. A filter trained to answer such rows with a
+Gaussian centred on the middle row answers a new frame's rows with a peak at the row whose size matches the
+object best (M. Danelljan, G. Hager, F. Shahbaz Khan, M. Felsberg, "Accurate scale estimation for robust visual
+tracking", BMVC 2014). The correlation runs along the size axis only: one DFT of ``n_scales`` points per feature
+column.
+
+Speed: the DFTs are two small real matrix products over all columns at once (the size axis is short and odd,
+where NumPy's FFT along the first axis of a ``(17, 1792)`` matrix took 0.7 ms), and only the half spectrum of
+the real rows is kept.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+class ScaleFilter:
+    """DSST's scale filter on feature rows sampled at sizes ``exp(log_factors)`` times the size searched around.
+
+    Parameters
+    ----------
+    n_scales : int
+        Sizes sampled per search (odd: the middle row is the size searched around).
+    scale_step : float
+        Ratio of neighbouring sizes (1.02: 2 % apart, DSST's).
+    sigma_factor : float
+        Width of the Gaussian target along the size axis, as a multiple of ``sqrt(n_scales)`` rows (DSST's 1/4).
+    regularisation : float
+        Added to the filter's denominator (DSST's lambda).
+    """
+
+    def __init__(self, n_scales: int = 17, scale_step: float = 1.02, sigma_factor: float = 0.25,
+                 regularisation: float = 1e-2):
+        if n_scales < 3 or n_scales % 2 == 0:
+            raise ValueError(f"n_scales must be odd and at least 3, got {n_scales}")
+        if not scale_step > 1.0:
+            raise ValueError(f"scale_step must be above 1, got {scale_step}")
+        offsets = np.arange(n_scales) - n_scales // 2
+        self.log_step = math.log(scale_step)
+        #: Natural log of each row's size relative to the size searched around.
+        self.log_factors = offsets * self.log_step
+        # Half-spectrum DFT of the rows (frequencies 0 .. n_scales // 2), real and imaginary parts.
+        k = np.arange(n_scales // 2 + 1)[:, None]
+        phase = 2 * np.pi * k * np.arange(n_scales)[None, :] / n_scales
+        # Matlab's hann(n), as in DSST (no zero end points), folded into the forward transform.
+        window = np.hanning(n_scales + 2)[1:-1]
+        self._forward_re = (np.cos(phase) * window).astype(np.float32)
+        self._forward_im = (-np.sin(phase) * window).astype(np.float32)
+        # Inverse of a real signal's half spectrum (n_scales odd: no Nyquist bin): weight 1 at frequency 0, else 2.
+        weight = np.where(k == 0, 1.0, 2.0) / n_scales
+        self._inverse_re, self._inverse_im = (weight * np.cos(phase)).T, (-weight * np.sin(phase)).T
+        sigma = sigma_factor * math.sqrt(n_scales)
+        label = np.exp(-0.5 * (offsets / sigma) ** 2)
+        self._label = ((np.cos(phase) @ label)[:, None].astype(np.float32),
+                       (-np.sin(phase) @ label)[:, None].astype(np.float32))
+        self.regularisation = float(regularisation)
+        self._numerator = self._denominator = None
+
+    def _spectra(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # Two products, not one of both parts stacked: OpenBLAS runs the stacked one on several threads, which took
+        # 16 ms instead of 0.03 on a process pinned to one core (the speed benchmark's).
+        rows = np.ascontiguousarray(rows, np.float32)
+        return self._forward_re @ rows, self._forward_im @ rows
+
+    def learn(self, rows: np.ndarray, rate: float = 1.0) -> None:
+        """Train on feature rows ``(n_scales, D)`` sampled around the object's true size: rate 1 (and the first
+        call) replaces the model, less makes it a running average."""
+        x_re, x_im = self._spectra(rows)
+        g_re, g_im = self._label
+        # numerator = label * conj(x), per column; denominator = sum over columns of |x|^2
+        numerator_re, numerator_im = g_re * x_re + g_im * x_im, g_im * x_re - g_re * x_im
+        denominator = (x_re * x_re + x_im * x_im).sum(axis=1, dtype=np.float64)
+        if self._numerator is None or rate >= 1.0:
+            self._numerator, self._denominator = (numerator_re, numerator_im), denominator
+            return
+        (old_re, old_im), keep = self._numerator, 1.0 - rate
+        keep, rate = np.float32(keep), np.float32(rate)
+        self._numerator = keep * old_re + rate * numerator_re, keep * old_im + rate * numerator_im
+        self._denominator = keep * self._denominator + rate * denominator
+
+    def response(self, rows: np.ndarray) -> np.ndarray:
+        """The filter's response ``(n_scales,)`` on feature rows ``(n_scales, D)``."""
+        if self._numerator is None:
+            raise RuntimeError("ScaleFilter.response() called before learn()")
+        z_re, z_im = self._spectra(rows)
+        a_re, a_im = self._numerator
+        scale = 1.0 / (self._denominator + self.regularisation)
+        # Row-wise sums of products, accumulated in float64.
+        product_re = (np.einsum("ij,ij->i", a_re, z_re, dtype=np.float64)
+                      - np.einsum("ij,ij->i", a_im, z_im, dtype=np.float64)) * scale
+        product_im = (np.einsum("ij,ij->i", a_re, z_im, dtype=np.float64)
+                      + np.einsum("ij,ij->i", a_im, z_re, dtype=np.float64)) * scale
+        return self._inverse_re @ product_re + self._inverse_im @ product_im
+
+    def find(self, rows: np.ndarray) -> tuple[float, float]:
+        """The change of size (natural log) whose rows match the model best, to a fraction of a row (a parabola
+        through the peak and its neighbours), and the response's peak value."""
+        response = self.response(rows)
+        k = int(response.argmax())
+        offset = 0.0
+        if 0 < k < len(response) - 1:
+            left, centre, right = response[k - 1], response[k], response[k + 1]
+            curvature = left - 2 * centre + right
+            if curvature < 0:
+                offset = min(max(0.5 * (left - right) / curvature, -0.5), 0.5)
+        return float(self.log_factors[k] + offset * self.log_step), float(response[k])

@@ -22,6 +22,8 @@ import math
 
 import numpy as np
 
+from .logpolar import parabola_peak_2d
+
 
 class ScaleFilter:
     """DSST's scale filter on feature rows sampled at sizes ``exp(log_factors)`` times the size searched around.
@@ -101,15 +103,8 @@ class ScaleFilter:
                       + np.einsum("ij,ij->i", a_im, z_re, dtype=np.float64)) * scale
         return self._inverse_re @ product_re + self._inverse_im @ product_im
 
-    def find(self, rows: np.ndarray) -> tuple[float, float]:
+    def find(self, rows: np.ndarray) -> float:
         """The change of size (natural log) whose rows match the model best, to a fraction of a row (a parabola
-        through the peak and its neighbours), and the response's peak value."""
-        response = self.response(rows)
-        k = int(response.argmax())
-        offset = 0.0
-        if 0 < k < len(response) - 1:
-            left, centre, right = response[k - 1], response[k], response[k + 1]
-            curvature = left - 2 * centre + right
-            if curvature < 0:
-                offset = min(max(0.5 * (left - right) / curvature, -0.5), 0.5)
-        return float(self.log_factors[k] + offset * self.log_step), float(response[k])
+        through the peak and its neighbours; none at the first or last row)."""
+        _, row, _ = parabola_peak_2d(self.response(rows)[None, :])
+        return float((row - len(self.log_factors) // 2) * self.log_step)

@@ -1,4 +1,5 @@
-"""The scale filter (DSST's) reads a known change of size from rows sampled off a textured image."""
+"""The scale filter (DSST's): its response is DSST's, and it reads the direction and part of a known change of size
+from rows sampled off a textured image."""
 
 import math
 
@@ -39,7 +40,7 @@ def test_reads_the_direction_and_part_of_a_change_of_size(image):
     scale_filter = ScaleFilter(13, 1.025)
     scale_filter.learn(box_rows(image, 60.0, scale_filter.log_factors))
     zooms = [0.9, 0.95, 0.98, 1.0, 1.02, 1.05, 1.1]
-    readings = [scale_filter.find(box_rows(image, 60.0 / zoom, scale_filter.log_factors))[0] for zoom in zooms]
+    readings = [scale_filter.find(box_rows(image, 60.0 / zoom, scale_filter.log_factors)) for zoom in zooms]
     assert np.all(np.diff(readings) > 0)
     for zoom, reading in zip(zooms, readings):
         if zoom == 1.0:
@@ -54,7 +55,7 @@ def test_its_own_training_rows_peak_in_the_middle(image):
     scale_filter.learn(rows)
     response = scale_filter.response(rows)
     assert response.argmax() == 8
-    assert abs(scale_filter.find(rows)[0]) < 1e-6
+    assert abs(scale_filter.find(rows)) < 1e-6
 
 
 def test_the_response_is_dsst_s_computed_with_numpy_ffts(image):

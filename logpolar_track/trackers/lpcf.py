@@ -1131,7 +1131,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         else:
             around = self.shown_scale * (state.scale / self._shown_own_scale) ** _SHOWN_FOLLOWS
             rows = self._scale_rows(frame, state, around)
-            log_change, _ = self._scale_filter.find(rows)
+            log_change = self._scale_filter.find(rows)
             limit = math.log(_SHOWN_MAX_RATIO)
             log_ratio = min(max(math.log(around / state.scale) + log_change, -limit), limit)
             self.shown_scale = state.scale * math.exp(log_ratio)

@@ -13,7 +13,9 @@ window over the sizes, fixed on the middle row, holds the peak towards it (on a 
 
 Speed: the DFTs are two small real matrix products over all columns at once (the size axis is short and odd,
 where NumPy's FFT along the first axis of a ``(17, 1792)`` matrix took 0.7 ms), and only the half spectrum of
-the real rows is kept.
+the real rows is kept. The training numerator, the label's spectrum times the rows' conjugate spectra, is two
+more products of the rows, with the label folded into the transform, and the row sums accumulate in float32:
+on lpcf's 13 x 1792 rows, :meth:`ScaleFilter.learn` 75 -> 38 us and :meth:`ScaleFilter.find` 84 -> 42 us.
 """
 
 from __future__ import annotations
@@ -62,8 +64,12 @@ class ScaleFilter:
         self._inverse_re, self._inverse_im = (weight * np.cos(phase)).T, (-weight * np.sin(phase)).T
         sigma = sigma_factor * math.sqrt(n_scales)
         label = np.exp(-0.5 * (offsets / sigma) ** 2)
-        self._label = ((np.cos(phase) @ label)[:, None].astype(np.float32),
-                       (-np.sin(phase) @ label)[:, None].astype(np.float32))
+        g_re, g_im = (np.cos(phase) @ label)[:, None], (-np.sin(phase) @ label)[:, None]
+        # The training numerator label * conj(spectrum) is linear in the rows: one product each with the forward
+        # transform's rows scaled by the label's spectrum (cheaper than the spectra's element-wise products).
+        forward_re, forward_im = np.cos(phase) * window, -np.sin(phase) * window
+        self._numerator_re = (g_re * forward_re + g_im * forward_im).astype(np.float32)
+        self._numerator_im = (g_im * forward_re - g_re * forward_im).astype(np.float32)
         self.regularisation = float(regularisation)
         self._numerator = self._denominator = None
 
@@ -76,17 +82,17 @@ class ScaleFilter:
     def learn(self, rows: np.ndarray, rate: float = 1.0) -> None:
         """Train on feature rows ``(n_scales, D)`` sampled around the object's true size: rate 1 (and the first
         call) replaces the model, less makes it a running average."""
+        rows = np.ascontiguousarray(rows, np.float32)
         x_re, x_im = self._spectra(rows)
-        g_re, g_im = self._label
-        # numerator = label * conj(x), per column; denominator = sum over columns of |x|^2
-        numerator_re, numerator_im = g_re * x_re + g_im * x_im, g_im * x_re - g_re * x_im
-        denominator = (x_re * x_re + x_im * x_im).sum(axis=1, dtype=np.float64)
+        denominator = _row_dots(x_re, x_re) + _row_dots(x_im, x_im)  # per frequency, summed over columns
         if self._numerator is None or rate >= 1.0:
-            self._numerator, self._denominator = (numerator_re, numerator_im), denominator
+            self._numerator = self._numerator_re @ rows, self._numerator_im @ rows
+            self._denominator = denominator
             return
-        (old_re, old_im), keep = self._numerator, 1.0 - rate
-        keep, rate = np.float32(keep), np.float32(rate)
-        self._numerator = keep * old_re + rate * numerator_re, keep * old_im + rate * numerator_im
+        keep, rate = np.float32(1.0 - rate), np.float32(rate)
+        for old, part in zip(self._numerator, (self._numerator_re, self._numerator_im)):
+            old *= keep  # the model's arrays are its own (made by this method), so updated in place
+            old += (rate * part) @ rows
         self._denominator = keep * self._denominator + rate * denominator
 
     def response(self, rows: np.ndarray) -> np.ndarray:
@@ -96,11 +102,8 @@ class ScaleFilter:
         z_re, z_im = self._spectra(rows)
         a_re, a_im = self._numerator
         scale = 1.0 / (self._denominator + self.regularisation)
-        # Row-wise sums of products, accumulated in float64.
-        product_re = (np.einsum("ij,ij->i", a_re, z_re, dtype=np.float64)
-                      - np.einsum("ij,ij->i", a_im, z_im, dtype=np.float64)) * scale
-        product_im = (np.einsum("ij,ij->i", a_re, z_im, dtype=np.float64)
-                      + np.einsum("ij,ij->i", a_im, z_re, dtype=np.float64)) * scale
+        product_re = (_row_dots(a_re, z_re) - _row_dots(a_im, z_im)) * scale
+        product_im = (_row_dots(a_re, z_im) + _row_dots(a_im, z_re)) * scale
         return self._inverse_re @ product_re + self._inverse_im @ product_im
 
     def find(self, rows: np.ndarray) -> float:
@@ -108,3 +111,10 @@ class ScaleFilter:
         through the peak and its neighbours; none at the first or last row)."""
         _, row, _ = parabola_peak_2d(self.response(rows)[None, :])
         return float((row - len(self.log_factors) // 2) * self.log_step)
+
+
+def _row_dots(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise dot products ``(n,)`` of two ``(n, D)`` float32 matrices, accumulated in float32: a third of the
+    time of accumulating in float64 (13 against 45 us for lpcf's 7 x 1792 half-spectrum rows), at a relative
+    error of about 5e-6, which moves the peak by nothing measurable."""
+    return np.einsum("ij,ij->i", a, b)

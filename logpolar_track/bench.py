@@ -30,7 +30,7 @@ from .datasets import Sequence, discover
 from .errors import OutputError, UsageError
 from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
                        auc, score_track)
-from .executor import run_tasks
+from .executor import TRACKING_OPENCV_THREADS, opencv_threads, run_tasks
 from .geometry import Ellipse
 from .trackers import create_tracker, tracker_class, tracker_names
 from .trackers import opencv as _opencv_peers  # noqa: F401  (registers cv-mil, cv-kcf, cv-csrt)
@@ -135,7 +135,8 @@ def collect_sequences(datasets: Iterable) -> list[Sequence]:
     return sequences
 
 
-def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None, start: int = 0) -> dict:
+def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None, start: int = 0,
+            threads: int | None = TRACKING_OPENCV_THREADS) -> dict:
     """Run one tracker over one sequence and score it.
 
     Parameters
@@ -148,6 +149,10 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
         ``{"tracker_params": {name: {keyword: value}}}``: keyword tuning passed to the tracker.
     start : int
         Which initial ROI (:func:`start_roi`): 0, the ground truth's, or one of OTB's perturbed ones.
+    threads : int or None
+        OpenCV's worker threads while the tracker runs (:func:`~logpolar_track.executor.opencv_threads`): 1 by
+        default, so that every tracker, lptrack's and OpenCV's, is timed on one core; None leaves OpenCV's
+        setting alone (its default uses every core, which CSRT's parallel loops use).
 
     Returns
     -------
@@ -169,20 +174,21 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
     try:
         roi = start_roi(sequence.roi, start)
         tracker = create_tracker(tracker_name, **tracker_params)
-        for index, _time_s, frame in sequence.frames():
-            if index < sequence.start:
-                continue
-            if index == sequence.start:
-                state, ok = tracker.init(frame, roi), True
-            else:
-                t0 = time.perf_counter()
-                ok, state = tracker.update(frame)
-                update_time += time.perf_counter() - t0
-                updates += 1
-                lost += not ok
-            e = state.ellipse
-            rot = math.nan if state.rotation_deg is None else state.rotation_deg
-            rows.append((index, e.cx, e.cy, e.a, e.b, e.angle_deg, state.scale, rot, state.score))
+        with opencv_threads(threads):
+            for index, _time_s, frame in sequence.frames():
+                if index < sequence.start:
+                    continue
+                if index == sequence.start:
+                    state, ok = tracker.init(frame, roi), True
+                else:
+                    t0 = time.perf_counter()
+                    ok, state = tracker.update(frame)
+                    update_time += time.perf_counter() - t0
+                    updates += 1
+                    lost += not ok
+                e = state.ellipse
+                rot = math.nan if state.rotation_deg is None else state.rotation_deg
+                rows.append((index, e.cx, e.cy, e.a, e.b, e.angle_deg, state.scale, rot, state.score))
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # one failing pair must not sink the whole benchmark; it is reported
@@ -199,12 +205,13 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
 
 def _run_pair(pair: tuple, report=None) -> dict:
     """:func:`run_one` as an :mod:`~logpolar_track.executor` task: ``pair`` is (sequence, tracker, params,
-    start)."""
+    start, threads)."""
     return run_one(*pair)
 
 
 def run_bench(sequences: list[Sequence], trackers: list[str], *, params: Mapping | None = None, jobs: int = 1,
-              scheduler=None, on_result: Callable[[dict], None] | None = None, starts: int = 1) -> list[dict]:
+              scheduler=None, on_result: Callable[[dict], None] | None = None, starts: int = 1,
+              threads: int | None = TRACKING_OPENCV_THREADS) -> list[dict]:
     """Run every tracker on every sequence; results in (sequence, tracker) order whatever ``jobs`` is.
 
     Parameters
@@ -221,13 +228,15 @@ def run_bench(sequences: list[Sequence], trackers: list[str], *, params: Mapping
         Run the pairs on this Dask cluster instead (the sequences must be at the same paths on its workers).
     on_result : callable, optional
         Called with each result as it completes (progress display).
+    threads : int or None
+        OpenCV's worker threads per tracker (see :func:`run_one`).
     """
     if not 1 <= starts <= len(STARTS):
         raise UsageError(f"starts must be 1 to {len(STARTS)}, got {starts}")
-    pairs = [(s, t, params, k) for s in sequences for t in trackers for k in range(starts)]
+    pairs = [(s, t, params, k, threads) for s in sequences for t in trackers for k in range(starts)]
     runs: list[dict | None] = [None] * len(pairs)
     for outcome in run_tasks(_run_pair, pairs, jobs=jobs, scheduler=scheduler):
-        sequence, tracker, _, start = pairs[outcome.index]
+        sequence, tracker, _, start, _ = pairs[outcome.index]
         # run_one reports its own failures; a worker that died reports here, as a failed pair without frames.
         result = outcome.value if outcome.ok else _failed_pair(sequence, tracker, outcome.error, start)
         runs[outcome.index] = result

@@ -17,6 +17,7 @@ import numpy as np
 
 from .draw import draw_state
 from .errors import LptrackError, OutputError, RoiError, UsageError
+from .executor import TRACKING_OPENCV_THREADS, opencv_threads
 from .geometry import ROI_SYNTAX, Ellipse, check_roi_fits, parse_roi
 from . import trackers as _trackers
 from .results import CsvWriter, FrameResult
@@ -276,7 +277,7 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
 def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRACKER, start_frame: int = 0,
               max_frames: int | None = None, video_out=None, csv_out=None, overwrite: bool = False,
               progress: ProgressLike = False, tracker_params: dict | None = None,
-              csv_options: dict | None = None) -> RunSummary:
+              csv_options: dict | None = None, threads: int | None = TRACKING_OPENCV_THREADS) -> RunSummary:
     """Track one object through ``path`` and write the annotated video and/or the per-frame CSV.
 
     Parameters
@@ -295,6 +296,10 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
     csv_options : dict, optional
         Further keyword arguments of :class:`~logpolar_track.results.CsvWriter` (``data_format``, ``video``,
         ``header``, ``stream``), e.g. JSON lines, or a labelled stream for batches.
+    threads : int or None
+        OpenCV's worker threads while tracking (:func:`~logpolar_track.executor.opencv_threads`): 1 by default,
+        the fastest for every tracker (the video is decoded in a thread of its own); None leaves OpenCV's
+        setting alone. Restored afterwards.
 
     Returns
     -------
@@ -330,16 +335,17 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
                 video_writer = VideoWriter(video_out, reader.fps, overwrite=overwrite)
             step, finish = _progress_callback(progress, total)
             started = time.perf_counter()
-            for frame, result in _track(reader, ellipse, engine, max_frames):
-                if csv_writer is not None:
-                    csv_writer.write(result)
-                if video_writer is not None:
-                    # The tracker is done with the frame: annotate it in place rather than a copy.
-                    video_writer.write(draw_state(frame, result.state, frame_index=result.frame,
-                                                  status=result.status, in_place=True))
-                frames += 1
-                lost += result.lost
-                step(frames)
+            with opencv_threads(threads):
+                for frame, result in _track(reader, ellipse, engine, max_frames):
+                    if csv_writer is not None:
+                        csv_writer.write(result)
+                    if video_writer is not None:
+                        # The tracker is done with the frame: annotate it in place rather than a copy.
+                        video_writer.write(draw_state(frame, result.state, frame_index=result.frame,
+                                                      status=result.status, in_place=True))
+                    frames += 1
+                    lost += result.lost
+                    step(frames)
             seconds = time.perf_counter() - started
             written = video_writer.close() if video_writer is not None else None
             if csv_writer is not None:

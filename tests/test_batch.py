@@ -16,6 +16,7 @@ import sys
 import time
 from pathlib import Path
 
+import cv2
 import pytest
 from click.testing import CliRunner
 
@@ -25,7 +26,7 @@ from logpolar_track.batch import (BatchProgress, VideoInput, VideoOutcome, annou
 from logpolar_track.cli import main
 from logpolar_track.cli import run as cli_run
 from logpolar_track.errors import UsageError
-from logpolar_track.executor import DASK_HINT
+from logpolar_track.executor import DASK_HINT, opencv_threads
 from logpolar_track.geometry import Ellipse
 from logpolar_track.results import COLUMNS, header_line
 
@@ -636,3 +637,33 @@ def test_killed_worker_costs_only_its_video(long_footage, tmp_path):
                               "--skip-existing", "--jobs", "2"], capture_output=True, text=True)
     assert resumed.returncode == 0 and "3 skipped (outputs exist)" in resumed.stderr
     assert _complete(out) == ALL_OUTPUTS
+
+
+# -- OpenCV's threads while tracking ------------------------------------------------------------------------
+
+def test_opencv_threads_sets_and_restores_after_the_last_overlapping_block():
+    previous = cv2.getNumThreads()
+    cv2.setNumThreads(2)
+    try:
+        _check_opencv_threads(before=2)
+    finally:
+        cv2.setNumThreads(previous)
+
+
+def _check_opencv_threads(before: int) -> None:
+    assert cv2.getNumThreads() == before
+    with opencv_threads(1):
+        assert cv2.getNumThreads() == 1
+        with opencv_threads(1):  # a second run in another thread of the process, overlapping
+            pass
+        assert cv2.getNumThreads() == 1  # the first run still holds its setting
+    assert cv2.getNumThreads() == before
+    with opencv_threads(None):
+        assert cv2.getNumThreads() == before
+    with pytest.raises(UsageError, match="at least 1"):
+        with opencv_threads(0):
+            pass
+    with pytest.raises(KeyError):
+        with opencv_threads(1):
+            raise KeyError("a failed run restores the setting too")
+    assert cv2.getNumThreads() == before

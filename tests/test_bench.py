@@ -119,6 +119,34 @@ def test_bench_end_to_end_json(dataset, oracle, tmp_path):
     assert any(line.split()[:2] == ["alpha", oracle] and line.split()[3] == "100.0" for line in table)
 
 
+class _ThreadsSeen(_Oracle):
+    """:class:`_Oracle`, noting OpenCV's thread count at each update."""
+
+    name = "test-threads-seen"
+    seen: list = []
+
+    def update(self, frame):
+        self.seen.append(cv2.getNumThreads())
+        return super().update(frame)
+
+
+@pytest.mark.parametrize("args, expected", [([], 1), (["--threads", "2"], 2)])
+def test_bench_runs_each_tracker_on_one_opencv_thread_unless_told(dataset, monkeypatch, tmp_path, args, expected):
+    monkeypatch.setitem(base._REGISTRY, _ThreadsSeen.name, _ThreadsSeen)
+    monkeypatch.setattr(_ThreadsSeen, "seen", [])
+    previous = cv2.getNumThreads()
+    cv2.setNumThreads(3)
+    try:
+        res = _run("bench", "--dataset", dataset, "--trackers", _ThreadsSeen.name, "--json", tmp_path / "b.json",
+                   "-q", *args)
+        assert cv2.getNumThreads() == 3  # restored
+    finally:
+        cv2.setNumThreads(previous)
+    assert res.exit_code == 0, res.stderr
+    assert set(_ThreadsSeen.seen) == {expected} and len(_ThreadsSeen.seen) == 2 * (N_FRAMES - 1)
+    assert json.loads((tmp_path / "b.json").read_text())["parameters"]["opencv_threads"] == expected
+
+
 def test_bench_json_to_stdout_is_only_json(dataset, tmp_path):
     res = _run("bench", "--dataset", dataset, "--trackers", "cv-mil", "--json", "-", "--per-frame", "-q")
     assert res.exit_code == 0, res.stderr
@@ -209,7 +237,9 @@ def test_bench_from_several_starts_gives_their_mean(dataset):
 
 @pytest.mark.parametrize("args, message", [
     (["--starts", "14"], "1<=x<=13"),
-    (["--starts", "2", "--speed"], "no --dataset, --per-frame, --plot or --starts")])
+    (["--starts", "2", "--speed"], "no --dataset, --per-frame, --plot, --starts or --threads"),
+    (["--threads", "2", "--speed"], "no --dataset, --per-frame, --plot, --starts or --threads"),
+    (["--threads", "0"], "x>=1")])
 def test_bad_starts_are_usage_errors(dataset, args, message):
     res = _run("bench", "--trackers", "fixed", *args)
     assert res.exit_code == 2 and message in res.stderr and res.stdout == ""

@@ -17,6 +17,7 @@ import threading
 from pathlib import Path
 
 import numpy as np
+import cv2
 import pytest
 from click.testing import CliRunner
 
@@ -515,3 +516,33 @@ def test_roi_sidecar_comments_and_ambiguities(tmp_path):
     with pytest.raises(LptrackError, match="cannot read ROI file") as info:
         read_roi_sidecar(video)
     assert info.value.exit_code == 1
+
+
+class ThreadsSeen(Still):
+    """:class:`Still`, noting OpenCV's thread count at each update."""
+
+    def __init__(self):
+        self.seen = []
+
+    def update(self, frame):
+        self.seen.append(cv2.getNumThreads())
+        return super().update(frame)
+
+
+@pytest.fixture
+def two_opencv_threads():
+    previous = cv2.getNumThreads()
+    cv2.setNumThreads(2)
+    yield 2
+    cv2.setNumThreads(previous)
+
+
+def test_run_video_tracks_with_one_opencv_thread_and_restores_the_setting(tiny_video, tmp_path, two_opencv_threads):
+    before = cv2.getNumThreads()
+    assert before == two_opencv_threads
+    tracker = ThreadsSeen()
+    run_video(tiny_video.path, "80,60,20", tracker=tracker, csv_out=tmp_path / "t.csv")
+    assert set(tracker.seen) == {1} and cv2.getNumThreads() == before
+    tracker = ThreadsSeen()
+    run_video(tiny_video.path, "80,60,20", tracker=tracker, csv_out=tmp_path / "u.csv", threads=None)
+    assert set(tracker.seen) == {before}

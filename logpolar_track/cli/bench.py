@@ -11,6 +11,7 @@ import click
 from ..bench import (STARTS, bench_document, collect_sequences, default_dataset, eval_document, format_table,
                      matplotlib_missing, plot_curves, resolve_trackers, run_bench, summarise, write_text_atomic)
 from ..errors import UsageError
+from ..executor import TRACKING_OPENCV_THREADS
 from . import EXIT_FAILURE, OneLineErrors, main
 
 
@@ -67,13 +68,17 @@ Examples:
               help=f"Track each sequence from N initial ROIs: the ground truth's, then OTB's spatial robustness "
                    f"(SRE) ones: shifted by 10 % of the box (4 to the sides, 4 to the corners), scaled by 0.8, "
                    f"0.9, 1.1, 1.2 (at most {len(STARTS)}). Each row is the mean over its starts.")
+@click.option("--threads", type=click.IntRange(min=1), default=None, metavar="N",
+              help="OpenCV threads per tracker. Default 1: every tracker, lptrack's and OpenCV's, on one core, so "
+                   "frames/s compare per core (more lets OpenCV's CSRT spread its work over cores).")
 @click.option("--speed", is_flag=True,
               help="Time the trackers instead (thesis Table 4.1 on a 640x480 synthetic video, one core) with "
                    "decode and 'lptrack run' baselines; uses --trackers, --json and --quiet only. "
                    "LPTRACK_SPEED_FRAMES sets the frames per sequence (default 100).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no notes on stderr.")
 def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None, per_frame: bool,
-          plot_out: Path | None, jobs: int, scheduler: str | None, starts: int, quiet: bool, speed: bool) -> None:
+          plot_out: Path | None, jobs: int, scheduler: str | None, starts: int, threads: int | None, quiet: bool,
+          speed: bool) -> None:
     """Run trackers over sequences with ground truth and compare them.
 
     Prints one row per sequence and tracker and a mean row per tracker:
@@ -85,9 +90,9 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
     with and without video output as a share of them.
     """
     if speed:
-        if datasets or per_frame or plot_out is not None or starts != 1:
-            raise UsageError("--speed times trackers on a synthetic video; it takes no --dataset, --per-frame, "
-                             "--plot or --starts")
+        if datasets or per_frame or plot_out is not None or starts != 1 or threads is not None:
+            raise UsageError("--speed times trackers on a synthetic video on one core; it takes no --dataset, "
+                             "--per-frame, --plot, --starts or --threads")
         _speed(trackers, json_out, quiet)
         return
     if plot_out is not None:
@@ -103,6 +108,7 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
         datasets = (found,)
     names, skipped = _runnable_trackers(trackers, quiet)
     sequences = collect_sequences(datasets)
+    threads = TRACKING_OPENCV_THREADS if threads is None else threads
 
     show_progress = not quiet and sys.stderr.isatty()
     bar = None
@@ -117,14 +123,15 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
             bar.update(1)
 
     try:
-        results = run_bench(sequences, names, jobs=jobs, scheduler=scheduler, on_result=progress, starts=starts)
+        results = run_bench(sequences, names, jobs=jobs, scheduler=scheduler, on_result=progress, starts=starts,
+                            threads=threads)
     finally:
         if bar is not None:
             bar.close()
     summary = summarise(results, names)
     table = format_table(results, summary)
     parameters = {"datasets": [str(d) for d in datasets], "trackers": names, "jobs": jobs,
-                  "scheduler": scheduler, "starts": starts,
+                  "scheduler": scheduler, "starts": starts, "opencv_threads": threads,
                   "start_perturbations": [list(p) for p in STARTS[:starts]]}
     failed = [r for r in results if r["error"]]
     doc = None if json_out is None else bench_document(results, summary, sequences, parameters=parameters,

@@ -240,17 +240,17 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         up, and so its size drifts (human3's walker was reported 1.4 times too large). Where the refinement is
         believed (a rigid object), the tracker's own scale is reported, as without the filter, and the filter
         neither searches nor learns there (learning there too measured the same: 0.4738 against 0.4736 over the 13
-        starts on machine C). Against lpcf without it, the 7 real sequences' mean IoU AUC over OTB's 13 SRE starts 0.4618
-        -> 0.4697 (human3 0.399 -> 0.432, crossing 0.680 -> 0.699; bag 0.442 -> 0.434), from the box 0.5395 ->
-        0.5621 (human3 0.486 -> 0.608, crossing 0.766 -> 0.788, toy 0.720 -> 0.740; bag 0.552 -> 0.539);
-        sample_videos unchanged (0.951). Feeding the filter's size back into the tracker instead (its scale
+        starts on machine C). Against lpcf without it (machine B), the 7 real sequences' mean IoU AUC over OTB's 13
+        SRE starts 0.4618 -> 0.4697 (human3 0.399 -> 0.432, crossing 0.680 -> 0.699; bag 0.442 -> 0.434), from the
+        box 0.5395 -> 0.5621 (human3 0.486 -> 0.608, crossing 0.766 -> 0.788, toy 0.720 -> 0.740; bag 0.552 ->
+        0.539); sample_videos unchanged (0.951). Feeding the filter's size back into the tracker instead (its scale
         replaced where the refinement is not believed) measured 0.4596 / 0.5512 (bag 0.383, toy 0.524 over the 13
-        starts); the filter's size averaged with the tracker's in log, 0.449 / 0.532; a normalised correlation
-        with a template of the box in place of the filter, 0.439 / 0.520; the filter's features as grey alone (a
-        fraction of their cost), 0.4658 / 0.5546. Limitation: the filter reads only part of each change, so the
-        reported size of a deforming object lags a steady zoom (a rigid disc zooming 1 % a frame with the refinement
-        forced off: 2-7 %, see ``_SHOWN_FOLLOWS``). Costs 0.2 ms a frame on the real sequences on machine B (see
-        the speed notes above), where it was first measured; less since (see :mod:`~logpolar_track.scale_filter`).
+        starts); the filter's size averaged with the tracker's in log, 0.449 / 0.532; a normalised correlation with
+        a template of the box in place of the filter, 0.439 / 0.520; the filter's features as grey alone (a fraction
+        of their cost), 0.4658 / 0.5546. Limitation: the filter reads only part of each change, so the reported size
+        of a deforming object lags a steady zoom (a rigid disc zooming 1 % a frame with the refinement forced off:
+        2-7 %, see ``_SHOWN_FOLLOWS``). Costs 0.2 ms a frame on the real sequences on machine B (see the speed notes
+        above), where it was first measured; less since (see :mod:`~logpolar_track.scale_filter`).
     scale_filter_rate : float
         Running-average weight of a confident frame in the scale filter (DSST's 0.025: 0.4660 / 0.5632 over the 13
         starts / from the box, with 17 sizes 2 % apart; 0.05: 0.4681 / 0.5639; 0.1: 0.4690 / 0.5624; 0.012:

@@ -65,9 +65,9 @@ latter, the crop's grey conversion and blur about a sixth, the log-polar matches
 filter-only path's shortcuts move results by tenths of a pixel at most (tests/test_lpcf.py compares the skipped
 correlation and the reused patch with the straightforward tracker, and the halved crop's samples with a
 full-size blur's). The scale filter (step 6) samples its 13 boxes from the same crop in one ``cv2.remap`` and
-computes their features in one pass; where the refinement is believed it only learns, every other frame. On
-the real sequences it costs 0.2 ms a frame (on a slower machine without AVX-512, one core: 3.3-3.5 ms a frame
-without it, 3.5-3.7 ms with it).
+computes their features in one pass; where the refinement is believed it neither searches nor learns. On the
+real sequences it cost 0.2 ms a frame when it was added (on a slower machine without AVX-512, one core: 3.3-3.5
+ms a frame without it, 3.5-3.7 ms with it), less since.
 
 References
 ----------
@@ -409,7 +409,6 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         #: The size reported (relative to the ROI's), where it is the scale filter's (see ``scale_filter``).
         self.shown_scale = self._shown_own_scale = 1.0  # and the tracker's own scale when it was last reported
         self._scale_filter = self._scale_sample = None
-        self._size_believed = False  # whether the last size reported was the tracker's own (see _shown_size)
         if self.scale_filter:
             # The filter's samples cover the ROI's box in the patches' frame, every other patch sample (sampled
             # every sample and averaged in pairs, so that the blurred crop serves them without aliasing).
@@ -590,9 +589,12 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self.velocity[:] = 0.0
             self.spin_deg, self.zoom = 0.0, 0.0
             return refined
+        # Where the refinement is believed (a rigid object), the tracker's own size is reported and the scale
+        # filter is left alone (see scale_filter).
+        size_believed = distance is not None and distance < self.refine_max_distance
         shown = refined
         if self._scale_filter is not None:
-            shown = self._shown_size(frame, refined, distance is not None and distance < self.refine_max_distance)
+            shown = self._shown_size(frame, refined, size_believed)
         # Velocity: the last frame's motion, damped (the alpha-beta update v = d (v + correction), written out), so
         # a stationary response on featureless ground cannot carry the estimate away. A place found by the
         # whole-frame search was reached over all the frames since the last good one: the mean motion since then
@@ -621,7 +623,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self._learnable += 1
             if self._learnable >= self.learn_every:
                 self._learnable = 0
-                self._learn(frame, refined, lp_height)
+                self._learn(frame, refined, lp_height, size_believed)
         return shown
 
     def _turn_and_zoom_after(self, turn_deg: float, log_zoom: float, lp_height: float,
@@ -841,7 +843,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         return Similarity(state.cx, state.cy, state.scale * math.exp(log_scale), state.rotation_deg + rotation,
                           state.score), height
 
-    def _learn(self, frame, state: Similarity, lp_height: float) -> None:
+    def _learn(self, frame, state: Similarity, lp_height: float, size_believed: bool) -> None:
         # The last correlation's patch is where the object was found to within a fraction of a sample (on the
         # real sequences the median is 0.02 samples, the 95th percentile 0.25): learn from it rather than
         # sample another patch, unless the object is further off its centre than that or the patch's scale and
@@ -856,7 +858,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         if self.colour is not None:
             self.colour.update(self._colour_bins(frame, state), self._colour_inside, self._colour_outside,
                                1 - (1 - self.colour.learning_rate) ** self.learn_every)
-        if self._scale_filter is not None and not self._size_believed:
+        if self._scale_filter is not None and not size_believed:
             # Where the refinement is believed the filter's size is not used, and learning there too changed
             # nothing measurable (13 starts of the real sequences 0.4738 against 0.4736, from the box 0.5662 both;
             # machine C) while its rows cost 0.2 ms a learning frame.
@@ -1131,7 +1133,6 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         the last size reported, moved by ``_SHOWN_FOLLOWS`` of the tracker's own change of scale since (see
         ``scale_filter``)."""
         self._scale_sample = None
-        self._size_believed = believed
         if believed:
             self.shown_scale = state.scale
         else:

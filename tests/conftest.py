@@ -109,3 +109,12 @@ def tiny_video(_tiny_video_master, tmp_path) -> SyntheticVideo:
     path.write_bytes(master.path.read_bytes())
     path.with_suffix(".roi").write_text(master.roi.to_spec() + "\n")
     return SyntheticVideo(path, master.roi, master.poses, master.frames, master.fps, master.fourcc)
+
+
+@pytest.fixture
+def two_opencv_threads():
+    """OpenCV set to 2 threads for the test (restored after), so that a setting of 1 can be told from it."""
+    previous = cv2.getNumThreads()
+    cv2.setNumThreads(2)
+    yield 2
+    cv2.setNumThreads(previous)

@@ -641,16 +641,8 @@ def test_killed_worker_costs_only_its_video(long_footage, tmp_path):
 
 # -- OpenCV's threads while tracking ------------------------------------------------------------------------
 
-def test_opencv_threads_sets_and_restores_after_the_last_overlapping_block():
-    previous = cv2.getNumThreads()
-    cv2.setNumThreads(2)
-    try:
-        _check_opencv_threads(before=2)
-    finally:
-        cv2.setNumThreads(previous)
-
-
-def _check_opencv_threads(before: int) -> None:
+def test_opencv_threads_sets_and_restores_after_the_last_overlapping_block(two_opencv_threads):
+    before = two_opencv_threads
     assert cv2.getNumThreads() == before
     with opencv_threads(1):
         assert cv2.getNumThreads() == 1

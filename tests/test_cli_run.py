@@ -529,14 +529,6 @@ class ThreadsSeen(Still):
         return super().update(frame)
 
 
-@pytest.fixture
-def two_opencv_threads():
-    previous = cv2.getNumThreads()
-    cv2.setNumThreads(2)
-    yield 2
-    cv2.setNumThreads(previous)
-
-
 def test_run_video_tracks_with_one_opencv_thread_and_restores_the_setting(tiny_video, tmp_path, two_opencv_threads):
     before = cv2.getNumThreads()
     assert before == two_opencv_threads

@@ -27,7 +27,7 @@ import threading
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import IO, Callable, Iterable, Sequence
+from typing import IO, Callable, Iterable, Mapping, Sequence
 
 from .errors import LptrackError, RoiError, UsageError
 from .executor import TaskOutcome, run_tasks
@@ -92,6 +92,7 @@ class VideoJob:
     overwrite: bool = False
     stream: bool = False
     max_frames: int | None = None
+    tracker_params: Mapping[str, object] | None = None
 
 
 @dataclass(frozen=True)
@@ -389,7 +390,8 @@ class BatchPlan:
 def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entries: Iterable[RoiEntry] = (),
                tracker: str = DEFAULT_TRACKER, start_frame: int = 0, max_frames: int | None = None, out_dir=".",
                video: bool = True, stream: bool = False, data_format: str = "csv", overwrite: bool = False,
-               skip_existing: bool = False) -> BatchPlan:
+               skip_existing: bool = False, tracker_params: Mapping[str, Mapping[str, object]] | None = None
+               ) -> BatchPlan:
     """Give every video its ROI, start frame, tracker and outputs.
 
     Parameters
@@ -403,6 +405,9 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         Per-video ROIs (:func:`read_roi_file`); their start frame and tracker override the defaults.
     tracker, start_frame
         Defaults for videos whose entry does not say.
+    tracker_params : mapping, optional
+        ``{tracker: {keyword: value}}``: tuning for each video tracked by that tracker
+        (:func:`~logpolar_track.trackers.tracker_params_from_text` makes it from ``--param`` text).
     max_frames : int, optional
         Frames to track per video, the start frame included (None: to the end).
     out_dir : path
@@ -436,8 +441,9 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         video_out = folder / f"{base.name}{VIDEO_OUT_SUFFIX}" if video else None
         csv_out = None if stream else folder / f"{base.name}{_data_suffix(data_format)}"
         entry = entries.get(video_key(item.path))
+        job_tracker = entry.tracker if entry and entry.tracker else tracker
         job = VideoJob(label=label, video=video_key(item.path), roi=entry.roi if entry else roi,
-                       tracker=(entry.tracker if entry and entry.tracker else tracker),
+                       tracker=job_tracker, tracker_params=dict((tracker_params or {}).get(job_tracker) or {}),
                        start_frame=(entry.start_frame if entry and entry.start_frame is not None else start_frame),
                        max_frames=max_frames, video_out=video_out, csv_out=csv_out, data_format=data_format,
                        # A partial set (a run killed between its two renames) is redone whole.
@@ -474,7 +480,7 @@ def run_job(job: VideoJob, report: Callable[[int], None] | None = None) -> Video
     summary = run_video(job.video, job.roi, tracker=job.tracker, start_frame=job.start_frame,
                         max_frames=job.max_frames, video_out=job.video_out,
                         csv_out="-" if job.stream else job.csv_out, overwrite=job.overwrite, progress=progress,
-                        csv_options=csv_options)
+                        csv_options=csv_options, tracker_params=job.tracker_params)
     return VideoOutcome(job.label, "ok", frames=summary.frames, lost=summary.lost,
                         expected_frames=summary.expected_frames, seconds=summary.seconds,
                         truncated=summary.truncated,

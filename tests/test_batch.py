@@ -247,6 +247,29 @@ def test_roi_file_relative_paths_start_frame_and_tracker(work):
     assert firsts["footage/day1/b.mp4"]["frame"] == "5"
 
 
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_param_reaches_every_video_of_a_batch(work, jobs):
+    # With lost_threshold=1 every frame after the first is reported lost (a match never reaches 1). The ROI file
+    # gives a.mp4 the thesis tracker, which takes both parameters, and b.mp4 lpcf, which takes no 'window'.
+    (work / "rois.csv").write_text("footage/day1/a.mp4,80,60,20,0,fixed\nfootage/day1/b.mp4,80,60,20,0,lpcf\n")
+    result = invoke("--roi-file", "rois.csv", "--out-dir", "out", "--no-video", "--jobs", jobs,
+                    "--param", "lost_threshold=1", "--param", "window=9")
+    assert result.exit_code == 0, result.stderr
+    a_rows, b_rows = csv_rows(work / "out/a.lptrack.csv"), csv_rows(work / "out/b.lptrack.csv")
+    assert [r["status"] for r in a_rows] == ["init"] + ["lost"] * 19
+    assert [r["status"] for r in b_rows] == ["init"] + ["lost"] * 23
+    plain = invoke("footage/day1", "--out-dir", "plain", "--no-video", "--jobs", jobs, "--tracker", "fixed")
+    assert plain.exit_code == 0 and {r["status"] for r in csv_rows(work / "plain/a.lptrack.csv")[1:]} == \
+        {"tracked"}
+
+
+def test_bad_param_stops_a_batch_before_any_video(work):
+    result = invoke("footage/day1", "--out-dir", "out", "--no-video", "--param", "window=9")
+    assert result.exit_code == 2 and not (work / "out").exists()
+    assert result.stderr.startswith("lptrack: error: no parameter 'window' in lpcf: lpcf takes padding (1.0), ")
+    assert len(result.stderr.strip().splitlines()) == 1
+
+
 def test_roi_file_parsing(tmp_path):
     (tmp_path / "v.mp4").touch()
     text = ("clip.mp4,\"320,240,60,30,15\"\n"

@@ -147,6 +147,29 @@ def test_bench_runs_each_tracker_on_one_opencv_thread_unless_told(dataset, monke
     assert json.loads((tmp_path / "b.json").read_text())["parameters"]["opencv_threads"] == expected
 
 
+class _Tuned(_Oracle):
+    """:class:`_Oracle` with two tuning parameters, noting the values it was made with."""
+
+    name = "test-tuned"
+    made: list = []
+
+    def __init__(self, *, gain: float = 1.0, steps: int = 3):
+        self.made.append((gain, steps))
+
+
+def test_bench_param_tunes_the_trackers_that_take_it(dataset, monkeypatch, tmp_path):
+    monkeypatch.setitem(base._REGISTRY, _Tuned.name, _Tuned)
+    monkeypatch.setattr(_Tuned, "made", [])
+    res = _run("bench", "--dataset", dataset, "--trackers", f"{_Tuned.name},cv-mil", "--param", "gain=2.5",
+               "--param", "steps=4", "--json", tmp_path / "b.json", "-q")
+    assert res.exit_code == 0, res.stderr
+    # Made once when the values were checked, then once per sequence; the numbers typed as the defaults are.
+    assert _Tuned.made == [(2.5, 4)] * 3 and type(_Tuned.made[1][1]) is int
+    doc = json.loads((tmp_path / "b.json").read_text())
+    assert doc["parameters"]["tracker_params"] == {_Tuned.name: {"gain": 2.5, "steps": 4}}
+    assert all(r["error"] is None for r in doc["results"])
+
+
 def test_bench_json_to_stdout_is_only_json(dataset, tmp_path):
     res = _run("bench", "--dataset", dataset, "--trackers", "cv-mil", "--json", "-", "--per-frame", "-q")
     assert res.exit_code == 0, res.stderr
@@ -237,8 +260,11 @@ def test_bench_from_several_starts_gives_their_mean(dataset):
 
 @pytest.mark.parametrize("args, message", [
     (["--starts", "14"], "1<=x<=13"),
-    (["--starts", "2", "--speed"], "no --dataset, --per-frame, --plot, --starts or --threads"),
-    (["--threads", "2", "--speed"], "no --dataset, --per-frame, --plot, --starts or --threads"),
+    (["--starts", "2", "--speed"], "no --dataset, --per-frame, --plot, --starts, --threads or --param"),
+    (["--threads", "2", "--speed"], "no --dataset, --per-frame, --plot, --starts, --threads or --param"),
+    (["--param", "window=9", "--speed"], "no --dataset, --per-frame, --plot, --starts, --threads or --param"),
+    (["--param", "nosuch=9"], "no parameter 'nosuch' in fixed: fixed takes window (11)"),
+    (["--param", "window"], "--param takes NAME=VALUE"),
     (["--threads", "0"], "x>=1")])
 def test_bad_starts_are_usage_errors(dataset, args, message):
     res = _run("bench", "--trackers", "fixed", *args)

@@ -271,6 +271,16 @@ BAD = {
     "zero-frames": (None, ["--frames", "0"], 2, ["--frames"]),
     "unsupported-video-extension": (None, ["--out", "out.txt"], 2, ["unsupported extension", ".mp4"]),
     "out-and-no-video": (None, ["--out", "a.mp4", "--no-video"], 2, ["--no-video"]),
+    "param-unknown": (None, ["--param", "nosuch=1"], 2, ["no parameter 'nosuch' in lpcf", "learning_rate (0.02)"]),
+    "param-no-value": (None, ["--param", "learning_rate"], 2, ["--param takes NAME=VALUE", "'learning_rate'"]),
+    "param-not-a-number": (None, ["--param", "learning_rate=fast"], 2,
+                           ["learning_rate takes a finite number (default 0.02), got 'fast'"]),
+    "param-not-whole": (None, ["--tracker", "fixed", "--param", "window=9.5"], 2,
+                        ["fixed: parameter window takes a whole number (default 11), got '9.5'"]),
+    "param-not-a-flag": (None, ["--param", "scale_filter=maybe"], 2, ["takes true or false"]),
+    "param-out-of-range": (None, ["--param", "learning_rate=2"], 2, ["lpcf: learning_rate must be", "got 2"]),
+    "param-of-another-tracker": (None, ["--tracker", "cv-mil", "--param", "window=9"], 2,
+                                 ["no parameter 'window' in cv-mil", "cv-mil takes seed (0)"]),
 }
 
 
@@ -353,6 +363,27 @@ class Still(Tracker):
 
     def update(self, frame):
         return False, self.state
+
+
+def test_param_tunes_the_tracker_as_tracker_params_do(tiny_video, workdir):
+    result = invoke(tiny_video.path, "--no-video", "--csv", "tuned.csv", "--param", "learning_rate=0.2",
+                    "--param", "colour_weight=0")
+    assert result.exit_code == 0, result.stderr
+    run_video(tiny_video.path, None, csv_out=workdir / "library.csv",
+              tracker_params={"learning_rate": 0.2, "colour_weight": 0.0})
+    run_video(tiny_video.path, None, csv_out=workdir / "default.csv")
+    tuned = (workdir / "tuned.csv").read_text()
+    assert tuned == (workdir / "library.csv").read_text()
+    assert tuned != (workdir / "default.csv").read_text()
+
+
+def test_param_of_a_thesis_tracker(tiny_video, workdir):
+    # A match never reaches 1: with lost_threshold=1 every frame after the first is reported lost.
+    result = invoke(tiny_video.path, "--no-video", "--csv", "-", "--tracker", "fixed", "--param", "lost_threshold=1")
+    assert result.exit_code == 0, result.stderr
+    assert [r["status"] for r in read_rows(result.stdout)] == ["init"] + ["lost"] * (tiny_video.n_frames - 1)
+    default = invoke(tiny_video.path, "--no-video", "--csv", "-", "--tracker", "fixed")
+    assert {r["status"] for r in read_rows(default.stdout)[1:]} == {"tracked"}
 
 
 def test_track_video_accepts_a_tracker_instance(tiny_video):

@@ -15,7 +15,8 @@ import pytest
 from logpolar_track.errors import RoiError, UsageError
 from logpolar_track.geometry import Ellipse
 from logpolar_track.synthetic import Pose, random_texture, render_frame, similarity_path, synthetic_sequence
-from logpolar_track.trackers import create_tracker, tracker_class, tracker_names
+from logpolar_track.trackers import (create_tracker, tracker_class, tracker_names, tracker_parameters,
+                                    tracker_params_from_text)
 
 #: The thesis' log-polar trackers, held to the issue's bounds.
 THESIS = ["fixed", "diffdecomp", "update", "occlusion"]
@@ -270,3 +271,43 @@ def test_opencv_trackers_report_the_roi_moved_and_scaled(name):
         assert state.rotation_deg is None and e.angle_deg == roi.angle_deg
         assert (e.a, e.b) == pytest.approx((roi.a * state.scale, roi.b * state.scale))
         assert math.hypot(e.cx - pose.cx, e.cy - pose.cy) <= 3.0
+
+
+def test_tracker_parameters_are_the_keywords_a_tracker_takes_with_defaults():
+    lpcf = tracker_parameters("lpcf")
+    assert lpcf["padding"] == 1.0 and lpcf["patch_samples"] == 64 and lpcf["scale_filter"] is True
+    # lpcf-masked hands **params on to lpcf: it takes all of lpcf's, with its own defaults first.
+    masked = tracker_parameters("lpcf-masked")
+    assert set(masked) == set(lpcf) and masked["occlusion_mask"] is True and masked["colour_weight"] == 0.0
+    assert tracker_parameters("update")["update_threshold"] == 0.35 and tracker_parameters("update")["window"] == 11
+    assert tracker_parameters("cv-mil") == {"seed": 0}
+    for name in tracker_names():  # every parameter listed is one the tracker accepts, at its default
+        create_tracker(name, **tracker_parameters(name))
+
+
+def test_tracker_params_from_text_converts_by_the_defaults_type():
+    params = tracker_params_from_text(["lpcf", "fixed", "cv-mil"], [
+        ("padding", "1.5"), ("patch_samples", "48"), ("scale_filter", "off"), ("lost_threshold", "0.25"),
+        ("window", "9"), ("padding", "2")])
+    assert params == {"lpcf": {"padding": 2.0, "patch_samples": 48, "scale_filter": False, "lost_threshold": 0.25},
+                      "fixed": {"lost_threshold": 0.25, "window": 9}, "cv-mil": {}}
+    assert type(params["lpcf"]["patch_samples"]) is int and type(params["lpcf"]["padding"]) is float
+    assert tracker_params_from_text(["lpcf"], [("occlusion_mask", "TRUE")]) == {"lpcf": {"occlusion_mask": True}}
+    assert tracker_params_from_text(["lpcf"], []) == {"lpcf": {}}
+
+
+@pytest.mark.parametrize("trackers, pairs, fragments", [
+    (["lpcf"], [("nosuch", "1")], ["no parameter 'nosuch' in lpcf: lpcf takes padding (1.0), patch_samples (64)"]),
+    (["fixed", "cv-mil"], [("padding", "1")], ["in any of fixed, cv-mil", "cv-mil takes seed (0)"]),
+    (["lpcf"], [("padding", "wide")], ["lpcf: parameter padding takes a finite number (default 1.0), got 'wide'"]),
+    (["lpcf"], [("padding", "nan")], ["takes a finite number"]),
+    (["lpcf"], [("patch_samples", "64.0")], ["takes a whole number (default 64)"]),
+    (["lpcf"], [("scale_filter", "2")], ["takes true or false (default True)"]),
+    (["lpcf"], [("padding", "-1")], ["lpcf: padding must be"]),
+    (["nosuch"], [("padding", "1")], ["unknown tracker 'nosuch'"]),
+])
+def test_tracker_params_from_text_refuses_in_one_line(trackers, pairs, fragments):
+    with pytest.raises(UsageError) as caught:
+        tracker_params_from_text(trackers, pairs)
+    message = str(caught.value)
+    assert "\n" not in message and all(f in message for f in fragments), message

@@ -144,6 +144,25 @@ def parse_roi_option(spec: str) -> Ellipse:
         raise RoiError(message if ROI_SYNTAX in message else f"{message}; expected {ROI_SYNTAX}") from None
 
 
+#: Help of ``--param``, shared by ``lptrack run`` and ``lptrack bench``.
+PARAM_HELP = ("Tracker tuning, e.g. --param learning_rate=0.03 (repeatable): goes to the trackers that take NAME; "
+              "an unknown NAME gets the list of those they take, with their defaults.")
+
+
+def parse_param_options(assignments: tuple[str, ...], trackers) -> dict[str, dict]:
+    """``--param NAME=VALUE`` texts as ``{tracker: {NAME: value}}`` for ``trackers``
+    (:func:`~logpolar_track.trackers.tracker_params_from_text`)."""
+    from ..trackers import tracker_params_from_text
+
+    pairs = []
+    for text in assignments:
+        key, sep, value = text.partition("=")
+        if not sep or not key.strip() or not value.strip():
+            raise UsageError(f"--param takes NAME=VALUE (e.g. --param learning_rate=0.03), got '{text}'")
+        pairs.append((key.strip(), value.strip()))
+    return tracker_params_from_text(trackers, pairs)
+
+
 # Sub-commands register themselves on `main` when imported; one import line per command module.
 # --- command modules ---
 from . import run  # noqa: E402,F401

@@ -12,7 +12,7 @@ from ..bench import (STARTS, bench_document, collect_sequences, default_dataset,
                      matplotlib_missing, plot_curves, resolve_trackers, run_bench, summarise, write_text_atomic)
 from ..errors import UsageError
 from ..executor import TRACKING_OPENCV_THREADS
-from . import EXIT_FAILURE, OneLineErrors, main
+from . import EXIT_FAILURE, PARAM_HELP, OneLineErrors, main, parse_param_options
 
 
 _BENCH_EPILOG = """\b
@@ -44,6 +44,7 @@ Examples:
   lptrack bench --dataset ~/data/otb --trackers fixed,cv-mil --json res.json
   lptrack bench --trackers cv-csrt,cv-kcf --json - > res.json
   lptrack bench --dataset ~/data/otb --trackers lpcf,cv-csrt --starts 13 -j 2
+  lptrack bench --dataset ~/data/otb --trackers lpcf --param padding=1.5
 """
 
 
@@ -53,6 +54,7 @@ Examples:
               help="Folder of sequences (repeatable). Default: sample_videos/ of the project.")
 @click.option("--trackers", metavar="A,B,...",
               help="Comma-separated tracker names. Default: every available lptrack tracker and OpenCV peer.")
+@click.option("--param", "params", multiple=True, metavar="NAME=VALUE", help=PARAM_HELP)
 @click.option("--json", "json_out", metavar="PATH|-",
               help="Write every number, versions, machine and parameters as JSON; '-' for stdout (then the "
                    "table goes to stderr).")
@@ -76,7 +78,8 @@ Examples:
                    "decode and 'lptrack run' baselines; uses --trackers, --json and --quiet only. "
                    "LPTRACK_SPEED_FRAMES sets the frames per sequence (default 100).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no notes on stderr.")
-def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None, per_frame: bool,
+def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, ...], json_out: str | None,
+          per_frame: bool,
           plot_out: Path | None, jobs: int, scheduler: str | None, starts: int, threads: int | None, quiet: bool,
           speed: bool) -> None:
     """Run trackers over sequences with ground truth and compare them.
@@ -90,9 +93,9 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
     with and without video output as a share of them.
     """
     if speed:
-        if datasets or per_frame or plot_out is not None or starts != 1 or threads is not None:
+        if datasets or per_frame or plot_out is not None or starts != 1 or threads is not None or params:
             raise UsageError("--speed times trackers on a synthetic video on one core; it takes no --dataset, "
-                             "--per-frame, --plot, --starts or --threads")
+                             "--per-frame, --plot, --starts, --threads or --param")
         _speed(trackers, json_out, quiet)
         return
     if plot_out is not None:
@@ -107,6 +110,7 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
                              "(lptrack samples, OTB, VOT or UAV123 folders), or run it in the checkout")
         datasets = (found,)
     names, skipped = _runnable_trackers(trackers, quiet)
+    tuning = parse_param_options(params, names)
     sequences = collect_sequences(datasets)
     threads = TRACKING_OPENCV_THREADS if threads is None else threads
 
@@ -123,8 +127,8 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
             bar.update(1)
 
     try:
-        results = run_bench(sequences, names, jobs=jobs, scheduler=scheduler, on_result=progress, starts=starts,
-                            threads=threads)
+        results = run_bench(sequences, names, params={"tracker_params": tuning}, jobs=jobs, scheduler=scheduler,
+                            on_result=progress, starts=starts, threads=threads)
     finally:
         if bar is not None:
             bar.close()
@@ -132,6 +136,7 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, json_out: str | None
     table = format_table(results, summary)
     parameters = {"datasets": [str(d) for d in datasets], "trackers": names, "jobs": jobs,
                   "scheduler": scheduler, "starts": starts, "opencv_threads": threads,
+                  "tracker_params": {name: chosen for name, chosen in tuning.items() if chosen},
                   "start_perturbations": [list(p) for p in STARTS[:starts]]}
     failed = [r for r in results if r["error"]]
     doc = None if json_out is None else bench_document(results, summary, sequences, parameters=parameters,

@@ -25,7 +25,7 @@ from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, defau
 from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..video import make_output_folder, remove_empty_folders
-from . import EXIT_BROKEN_PIPE, EXIT_FAILURE, OneLineErrors, main, parse_roi_option
+from . import EXIT_BROKEN_PIPE, EXIT_FAILURE, PARAM_HELP, OneLineErrors, main, parse_param_options, parse_roi_option
 
 
 class RunCommand(OneLineErrors):
@@ -101,6 +101,7 @@ Trackers:
 Examples:
   lptrack run clip.mp4 --roi 320,240,40
   lptrack run clip.mp4 --roi 320,240,60,30,15 --tracker diffdecomp
+  lptrack run clip.mp4 --roi 320,240,40 --param learning_rate=0.05
   lptrack run clip.mp4 --roi 320,240,40 --no-video --csv - > track.csv
   lptrack run footage/ --roi-file rois.csv --out-dir tracks --jobs 4
   find footage -name '*.mp4' | lptrack run - --roi-file rois.csv --no-video --csv - > all.csv
@@ -117,6 +118,7 @@ Examples:
                    "With no VIDEO, its videos are the inputs.")
 @click.option("--tracker", type=TrackerChoice(), default=DEFAULT_TRACKER, show_default=True, metavar="NAME",
               help="Tracking method (see the list below).")
+@click.option("--param", "params", multiple=True, metavar="NAME=VALUE", help=PARAM_HELP)
 @click.option("--start-frame", type=click.IntRange(min=0), default=0, show_default=True, metavar="N",
               help="Frame index (0 = first) the ROI refers to; tracking starts there.")
 @click.option("--frames", "max_frames", type=click.IntRange(min=1), default=None, metavar="N",
@@ -144,10 +146,10 @@ Examples:
               help="Run the videos on this Dask scheduler (e.g. tcp://10.0.0.5:8786) instead; needs "
                    "pip install 'dask[distributed]' and the files at the same paths on the workers.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary on stderr (failures still).")
-def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tracker: str, start_frame: int,
-        max_frames: int | None, video_out: Path | None, csv_out: str | None, out_dir: Path | None,
-        data_format: str, no_video: bool, overwrite: bool, skip_existing: bool, jobs: int | None,
-        scheduler: str | None, quiet: bool) -> None:
+def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tracker: str,
+        params: tuple[str, ...], start_frame: int, max_frames: int | None, video_out: Path | None,
+        csv_out: str | None, out_dir: Path | None, data_format: str, no_video: bool, overwrite: bool,
+        skip_existing: bool, jobs: int | None, scheduler: str | None, quiet: bool) -> None:
     """Track the object inside a circle or ellipse through VIDEO (or many).
 
     Writes an annotated copy of the video (the tracked outline, a radius line
@@ -170,8 +172,9 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     single = (len(videos) == 1 and videos[0] != "-" and not Path(videos[0]).is_dir() and roi_file is None
               and scheduler is None)
     if single:
+        tuning = parse_param_options(params, [tracker])[tracker]
         _check_out_dir(out_dir, video_out=video_out, csv_out=csv_out, no_video=no_video, quiet=quiet)
-        _run_one(Path(videos[0]), roi, tracker=tracker, start_frame=start_frame, max_frames=max_frames,
+        _run_one(Path(videos[0]), roi, tracker=tracker, tuning=tuning, start_frame=start_frame, max_frames=max_frames,
                  video_out=video_out, csv_out=csv_out, out_dir=out_dir, data_format=data_format,
                  no_video=no_video, overwrite=overwrite, skip_existing=skip_existing, quiet=quiet)
         return
@@ -191,6 +194,7 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     if not videos and not entries:  # without VIDEO arguments the ROI file's videos are the inputs
         raise UsageError(f"no videos found in ROI file '{roi_file}': write one line per video, "
                          f"video,roi[,start_frame][,tracker]")
+    tuning = parse_param_options(params, [tracker] + [e.tracker for e in entries if e.tracker]) if params else None
 
     def named_again(path: Path) -> None:
         if not quiet:
@@ -204,7 +208,8 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
                           else ""))
     plan = plan_batch(inputs, roi=roi, roi_entries=entries, tracker=tracker, start_frame=start_frame,
                       max_frames=max_frames, out_dir=out_dir or ".", video=not no_video, stream=stream,
-                      data_format=data_format, overwrite=overwrite, skip_existing=skip_existing)
+                      data_format=data_format, overwrite=overwrite, skip_existing=skip_existing,
+                      tracker_params=tuning)
     # The folder is made (or refused, in one line) once, up front; if the batch leaves nothing in it, it goes.
     created = make_output_folder(out_dir) if out_dir is not None else []
     try:
@@ -255,20 +260,20 @@ def _stdout_closed() -> None:
     sys.exit(EXIT_BROKEN_PIPE)
 
 
-def _run_one(video: Path, roi, *, tracker: str, start_frame: int, max_frames: int | None,
+def _run_one(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, max_frames: int | None,
              video_out: Path | None, csv_out: str | None, out_dir: Path | None, data_format: str, no_video: bool,
              overwrite: bool, skip_existing: bool, quiet: bool) -> None:
     """One video in this process, errors raised as they are (exit 1 or 2)."""
     created = make_output_folder(out_dir) if out_dir is not None else []
     try:
-        _run_one_into(video, roi, tracker=tracker, start_frame=start_frame, max_frames=max_frames,
+        _run_one_into(video, roi, tracker=tracker, tuning=tuning, start_frame=start_frame, max_frames=max_frames,
                       video_out=video_out, csv_out=csv_out, out_dir=out_dir, data_format=data_format,
                       no_video=no_video, overwrite=overwrite, skip_existing=skip_existing, quiet=quiet)
     finally:
         remove_empty_folders(created)  # a run that failed or was stopped leaves no folder made for it
 
 
-def _run_one_into(video: Path, roi, *, tracker: str, start_frame: int, max_frames: int | None,
+def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, max_frames: int | None,
                   video_out: Path | None, csv_out: str | None, out_dir: Path | None, data_format: str,
                   no_video: bool, overwrite: bool, skip_existing: bool, quiet: bool) -> None:
     default_video, default_csv = default_outputs(video, out_dir or ".")
@@ -287,7 +292,8 @@ def _run_one_into(video: Path, roi, *, tracker: str, start_frame: int, max_frame
         summary = run_video(video, roi, tracker=tracker, start_frame=start_frame, max_frames=max_frames,
                             video_out=None if no_video else video_out, csv_out=csv_out,
                             overwrite=overwrite or skip_existing,
-                            progress=show and sys.stderr.isatty(), csv_options={"data_format": data_format})
+                            progress=show and sys.stderr.isatty(), csv_options={"data_format": data_format},
+                            tracker_params=tuning)
     except BrokenPipeError:
         _stdout_closed()
     if csv_out == "-" and _reader_left(sys.stdout):

@@ -4,7 +4,7 @@ Importing this package registers every tracker; :func:`create_tracker` builds on
 """
 
 from .base import (Similarity, SimilarityTracker, Tracker, TrackState, create_tracker, register, tracker_class,
-                   tracker_names)
+                   tracker_names, tracker_parameters, tracker_params_from_text)
 from . import thesis  # noqa: F401  (registers fixed, diffdecomp, update, occlusion)
 from . import spatial  # noqa: F401  (registers spatial)
 from . import lpcf  # noqa: F401  (registers lpcf, the default, and lpcf-masked)
@@ -16,4 +16,4 @@ from . import opencv  # noqa: F401  (registers the OpenCV peers cv-mil, cv-kcf, 
 DEFAULT_TRACKER = "lpcf"
 
 __all__ = ["DEFAULT_TRACKER", "Tracker", "TrackState", "Similarity", "SimilarityTracker", "create_tracker", "register",
-           "tracker_class", "tracker_names"]
+           "tracker_class", "tracker_names", "tracker_parameters", "tracker_params_from_text"]

@@ -7,10 +7,11 @@ frame" -- data, not an error -- and ``state`` then holds the last good geometry.
 
 from __future__ import annotations
 
+import inspect
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Callable, ClassVar
+from typing import Callable, ClassVar, Iterable
 
 import numpy as np
 
@@ -215,3 +216,88 @@ def create_tracker(name: str, **params) -> Tracker:
     if not getattr(cls, "available", lambda: True)():
         raise UsageError(f"tracker '{name}' is not available here: {cls.unavailable_reason()}")
     return cls(**params)
+
+
+def tracker_parameters(name: str) -> dict[str, object]:
+    """The keyword tuning parameters tracker ``name`` takes, with their defaults, in the order of its signature.
+
+    Read from the keyword-only parameters of the class's ``__init__`` and of the ``__init__`` it hands
+    ``**params`` on to (``lpcf-masked`` takes every parameter of ``lpcf``). Each default's type is the type a
+    value given as text is converted to (:func:`tracker_params_from_text`).
+    """
+    found: dict[str, object] = {}
+    for klass in inspect.getmro(tracker_class(name)):
+        init = klass.__dict__.get("__init__")
+        if init is None:
+            continue
+        passes_on = False
+        for parameter in inspect.signature(init).parameters.values():
+            if parameter.kind is parameter.VAR_KEYWORD:
+                passes_on = True
+            elif parameter.kind is parameter.KEYWORD_ONLY and parameter.default is not parameter.empty:
+                found.setdefault(parameter.name, parameter.default)
+        if not passes_on:
+            break
+    return found
+
+
+_TRUE, _FALSE = ("true", "yes", "on", "1"), ("false", "no", "off", "0")
+
+
+def _converted(tracker: str, key: str, text: str, default: object) -> object:
+    """``text`` as a value of ``default``'s type, or a UsageError saying what the parameter takes."""
+    kind = type(default)
+    try:
+        if kind is bool:
+            if text.strip().lower() in _TRUE + _FALSE:
+                return text.strip().lower() in _TRUE
+            raise ValueError
+        if kind is int:
+            return int(text)
+        if kind is float:
+            value = float(text)
+            if not math.isfinite(value):
+                raise ValueError
+            return value
+    except ValueError:
+        what = {bool: "true or false", int: "a whole number", float: "a finite number"}[kind]
+        raise UsageError(f"{tracker}: parameter {key} takes {what} (default {default}), got '{text}'") from None
+    return text
+
+
+def tracker_params_from_text(trackers: Iterable[str], assignments: Iterable[tuple[str, str]]
+                             ) -> dict[str, dict[str, object]]:
+    """Keyword tuning for each of ``trackers`` from ``(name, value text)`` pairs, as ``--param`` gives them.
+
+    Each pair goes to the trackers that take a parameter of that name, its value converted to the type of
+    the parameter's default (``true``/``false``, whole numbers, finite numbers, or text); a later pair of the
+    same name replaces an earlier one. Each tracker given parameters is made once, which checks their ranges.
+
+    Returns
+    -------
+    dict
+        ``{tracker: {parameter: value}}`` for every tracker in ``trackers`` (empty dicts where none applies).
+
+    Raises
+    ------
+    UsageError
+        An unknown or unavailable tracker given parameters, a name no tracker of ``trackers`` takes (the message
+        lists the ones they take, with their defaults), a value that does not convert, or one out of range.
+    """
+    trackers = list(dict.fromkeys(trackers))
+    taken = {tracker: tracker_parameters(tracker) for tracker in trackers}
+    params: dict[str, dict[str, object]] = {tracker: {} for tracker in trackers}
+    for key, text in assignments:
+        takers = [tracker for tracker in trackers if key in taken[tracker]]
+        if not takers:
+            listing = "; ".join(f"{tracker} takes " + (", ".join(f"{k} ({v})" for k, v in taken[tracker].items())
+                                                       or "none")
+                                for tracker in trackers)
+            who = trackers[0] if len(trackers) == 1 else f"any of {', '.join(trackers)}"
+            raise UsageError(f"no parameter '{key}' in {who}: {listing}")
+        for tracker in takers:
+            params[tracker][key] = _converted(tracker, key, text, taken[tracker][key])
+    for tracker, chosen in params.items():
+        if chosen:
+            create_tracker(tracker, **chosen)  # the tracker checks its ranges (one clear line) now, not per video
+    return params

@@ -33,6 +33,7 @@ from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCE
 from .executor import TRACKING_OPENCV_THREADS, opencv_threads, run_tasks
 from .geometry import Ellipse
 from .trackers import create_tracker, tracker_class, tracker_names
+from .video import writes_in_place
 from .trackers import opencv as _opencv_peers  # noqa: F401  (registers cv-mil, cv-kcf, cv-csrt)
 
 #: Version of the JSON document written by :func:`bench_document`; bump on incompatible changes.
@@ -477,6 +478,13 @@ def write_text_atomic(path, text: str) -> None:
         If the folder does not exist or is not writable.
     """
     path = Path(path)
+    if writes_in_place(path):  # /dev/stdout, a pipe: no temporary file to rename over it
+        try:
+            with open(path, "w", encoding="utf-8") as stream:
+                stream.write(text)
+        except OSError as exc:
+            raise OutputError(f"cannot write '{path}': {exc.strerror or exc}") from None
+        return
     if not path.parent.is_dir():
         raise OutputError(f"cannot write '{path}': folder '{path.parent}' does not exist")
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")

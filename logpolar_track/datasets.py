@@ -33,7 +33,7 @@ from typing import Iterator
 
 import numpy as np
 
-from .errors import RoiError, UsageError, VideoError
+from .errors import InputError, RoiError, UsageError, VideoError
 from .evaluate import GroundTruth, GroundTruthError, read_box_text, read_gt_csv
 from .geometry import Ellipse, parse_roi
 
@@ -243,14 +243,16 @@ def discover(path) -> list[Sequence]:
 
     Raises
     ------
-    UsageError
+    InputError
         If ``path`` does not exist.
+    UsageError
+        If ``path`` is a file that is not a video.
     GroundTruthError, RoiError, VideoError
         If a sequence's ground truth, ROI sidecar or video cannot be read.
     """
     path = Path(path)
     if not path.exists():
-        raise UsageError(f"dataset '{path}' does not exist; give a folder of sequences or a sample video")
+        raise InputError(f"dataset '{path}' does not exist; give a folder of sequences or a sample video")
     if path.is_file():
         if path.suffix.lower() in VIDEO_EXTENSIONS:
             return [video_sequence(path)]
@@ -273,14 +275,16 @@ def load_ground_truth(path) -> GroundTruth:
 
     Raises
     ------
+    InputError
+        If ``path`` does not exist.
     UsageError
-        If ``path`` does not exist, or is a folder holding no sequence or several.
+        If ``path`` is a folder holding no sequence or several.
     GroundTruthError
         If the file cannot be read.
     """
     path = Path(path)
     if not path.exists():
-        raise UsageError(f"ground truth '{path}' does not exist")
+        raise InputError(f"ground truth '{path}' does not exist")
     if path.is_file() and path.suffix.lower() not in VIDEO_EXTENSIONS:
         from .evaluate import read_ground_truth
 

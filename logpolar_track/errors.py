@@ -29,6 +29,12 @@ class VideoError(LptrackError):
     exit_code = 1
 
 
+class InputError(LptrackError):
+    """An input file or folder other than a video (a dataset, a ground-truth file) is missing."""
+
+    exit_code = 1
+
+
 class OutputError(LptrackError):
     """An output cannot be written (folder missing or unwritable, file exists)."""
 

@@ -257,6 +257,17 @@ def draw_roi(image: np.ndarray, roi: Ellipse, *, colour=ROI_COLOUR, label: bool 
     return out
 
 
+#: File types ``lptrack plot`` writes (matplotlib picks the format from the name).
+PLOT_SUFFIXES = (".png", ".pdf", ".svg")
+
+
+def check_image_suffix(path, suffixes: tuple[str, ...], what: str) -> None:
+    """Raise :class:`UsageError` unless ``path`` ends in one of ``suffixes`` (checked before any work)."""
+    if Path(path).suffix.lower() not in suffixes:
+        names = " or ".join(suffixes)
+        raise UsageError(f"cannot write {what} '{path}': give a file name ending in {names}")
+
+
 def write_png(path, image: np.ndarray, *, overwrite: bool = False, what: str = "output image") -> Path:
     """Write ``image`` as PNG atomically (temporary name in the same folder, then rename); return the path.
 
@@ -265,9 +276,8 @@ def write_png(path, image: np.ndarray, *, overwrite: bool = False, what: str = "
     OutputError
         Folder missing or unwritable, file exists without ``overwrite``, or encoding failed.
     """
+    check_image_suffix(path, (".png",), what)
     path = check_output_path(path, overwrite=overwrite, what=what)
-    if path.suffix.lower() != ".png":
-        raise OutputError(f"cannot write {what} '{path}': give a file name ending in .png")
     temp = temporary_path(path)
     try:
         if not cv2.imwrite(str(temp), image):
@@ -309,6 +319,7 @@ def write_frame_png(video_path, out_png=None, *, index: int | None = None, time_
     """
     frame = read_frame(video_path, index, time_s=time_s)
     out_png = default_frame_png(video_path, frame.index) if out_png is None else Path(out_png)
+    check_image_suffix(out_png, (".png",), "output image")
     check_output_path(out_png, overwrite=overwrite, what="output image")
     image = frame.image
     if roi is not None:
@@ -675,7 +686,8 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 def plot_track(run, out_png, *, video=None, ground_truth=None, overwrite: bool = False,
                title: str | None = None) -> Path:
-    """Draw a track as a figure and save it as PNG (:data:`PLOT_SIZE_IN` x :data:`PLOT_DPI` pixels).
+    """Draw a track as a figure and save it as PNG (:data:`PLOT_SIZE_IN` x :data:`PLOT_DPI` pixels), or as PDF or
+    SVG if ``out_png`` ends so (:data:`PLOT_SUFFIXES`).
 
     Panels: the centre path (over the run's first frame when ``video`` is given, in video pixels, y down;
     the initial outline dashed, lost frames as red crosses); scale; rotation (degrees CCW, cumulative); score,
@@ -698,9 +710,10 @@ def plot_track(run, out_png, *, video=None, ground_truth=None, overwrite: bool =
     Raises
     ------
     UsageError
-        matplotlib is missing (the message is the install hint).
+        matplotlib is missing (the message is the install hint), or ``out_png`` does not end in .png, .pdf or .svg.
     GroundTruthError, VideoError, OutputError
     """
+    check_image_suffix(out_png, PLOT_SUFFIXES, "output image")
     hint = matplotlib_hint()
     if hint:
         raise UsageError(hint)
@@ -894,6 +907,7 @@ def write_contact_sheet(video_path, run_csv_or_rows, out_png, *, cols: int = 4, 
     if width < 16 * cols:
         raise UsageError(f"sheet width {width} px is too small for {cols} columns (at least {16 * cols} px)")
     table = _as_table(run_csv_or_rows)
+    check_image_suffix(out_png, (".png",), "contact sheet")
     out_png = check_output_path(out_png, overwrite=overwrite, what="contact sheet")
     wanted = sheet_indices(len(table), count if count is not None else cols * rows)
     cols = min(cols, len(wanted))  # fewer frames than columns: no empty columns

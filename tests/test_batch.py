@@ -422,7 +422,8 @@ def test_video_without_roi_and_roi_outside_frame_fail_alone(work):
     assert result.exit_code == 1
     assert "footage/day1/a.mp4: no ROI given" in result.stderr
     assert "footage/day1/b.mp4: ROI centre" in result.stderr or "footage/day1/b.mp4: " in result.stderr
-    assert "2 videos: 0 ok, 2 failed" in result.stderr
+    # No rates where nothing was tracked (a batch failing at once once claimed thousands of videos/s).
+    assert re.search(r"2 videos: 0 ok, 2 failed; 0 frames in \d+\.\d s\n", result.stderr)
     assert not (work / "out").exists() or files_under(work / "out") == []
 
 

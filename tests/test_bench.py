@@ -285,6 +285,12 @@ def test_contrib_peers_skipped_cleanly_without_contrib(dataset):
     rows = [line.split() for line in res.stdout.splitlines()[2:]]
     trackers = {r[1] for r in rows if r and r[0] not in ("mean", "--------")}
     assert trackers == {"cv-mil"}
+    # None runnable: one line with the reasons, not notes before it; nor notes before a bad dataset's line.
+    res = _run("bench", "--dataset", dataset, "--trackers", "cv-kcf,cv-csrt")
+    assert res.exit_code == 2 and len(res.stderr.splitlines()) == 1
+    assert res.stderr.startswith("lptrack: error: none of the requested trackers can run here (cv-kcf: ")
+    res = _run("bench", "--dataset", dataset / "missing", "--trackers", "cv-kcf,cv-mil")
+    assert res.exit_code == 1 and len(res.stderr.splitlines()) == 1 and "does not exist" in res.stderr
 
 
 @pytest.mark.skipif(not (KCFTracker.available() and CSRTTracker.available()), reason="needs opencv-contrib")
@@ -325,6 +331,52 @@ def test_eval_rejects_unreadable_prediction(dataset, tmp_path):
     bad.write_text("frame,cx\n0,1\n")
     res = _run("eval", bad, dataset / "alpha.gt.csv")
     assert res.exit_code == 1 and res.stderr.startswith("lptrack: error:") and "lacks column" in res.stderr
+
+
+def test_bench_outputs_are_checked_before_the_run(dataset, tmp_path):
+    res = _run("bench", "--dataset", dataset, "--trackers", "cv-mil", "--json", tmp_path / "no" / "b.json")
+    assert res.exit_code == 1 and "folder" in res.stderr and "does not exist" in res.stderr
+    assert res.stdout == "" and len(res.stderr.splitlines()) == 1  # no table: nothing ran
+    res = _run("bench", "--dataset", dataset, "--trackers", "cv-mil", "--plot", tmp_path / "p.txt")
+    assert res.exit_code == 2 and "give a file name ending in .png or .pdf or .svg" in res.stderr
+    assert res.stdout == ""
+    kept = tmp_path / "kept.json"
+    kept.write_text("precious\n")
+    res = _run("bench", "--dataset", dataset, "--trackers", "cv-mil", "--json", kept, "-q")
+    assert res.exit_code == 1 and res.stdout == "" and kept.read_text() == "precious\n"
+    assert res.stderr == f"lptrack: error: JSON output '{kept}' already exists; use --overwrite to replace it\n"
+    res = _run("bench", "--dataset", dataset, "--trackers", "cv-mil", "--json", kept, "-q", "--overwrite")
+    assert res.exit_code == 0 and json.loads(kept.read_text())["tool"] == "lptrack bench"
+    res = _run("bench", "--speed", "--json", kept)
+    assert res.exit_code == 1 and "already exists" in res.stderr
+
+
+def test_missing_dataset_is_an_input_failure_as_a_missing_video_is(tmp_path):
+    res = _run("bench", "--dataset", tmp_path / "missing", "--trackers", "cv-mil")
+    assert res.exit_code == 1 and res.stderr == (f"lptrack: error: dataset '{tmp_path / 'missing'}' does not exist; "
+                                                 f"give a folder of sequences or a sample video\n")
+
+
+def test_eval_inputs_and_outputs(dataset, tmp_path):
+    truth = _TRUTH[(dataset / "alpha.roi").read_text().strip()]
+    pred = tmp_path / "alpha.csv"
+    _write_run_csv(pred, truth)
+    res = _run("eval", tmp_path / "missing.csv", dataset / "alpha.gt.csv")
+    assert res.exit_code == 1 and "missing.csv" in res.stderr and len(res.stderr.splitlines()) == 1
+    res = _run("eval", pred, tmp_path / "missing.txt")
+    assert res.exit_code == 1 and "ground truth" in res.stderr and "does not exist" in res.stderr
+    kept = tmp_path / "kept.json"
+    kept.write_text("precious\n")
+    res = _run("eval", pred, dataset / "alpha.gt.csv", "--json", kept)
+    assert res.exit_code == 1 and "already exists; use --overwrite" in res.stderr and kept.read_text() == "precious\n"
+    res = _run("eval", pred, dataset / "alpha.gt.csv", "--json", kept, "--overwrite")
+    assert res.exit_code == 0 and json.loads(kept.read_text())["tool"] == "lptrack eval"
+    # A run CSV covering only part of the ground truth is scored on that part, and said so.
+    pred.write_text("".join(pred.read_text().splitlines(keepends=True)[:4]))
+    res = _run("eval", pred, dataset / "alpha.gt.csv")
+    assert res.exit_code == 0
+    assert res.stderr == (f"lptrack: note: '{pred}' has no row for {N_FRAMES - 3} of the {N_FRAMES} frames with "
+                          f"ground truth; they are not scored\n")
 
 
 def test_plot(dataset, tmp_path):

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from logpolar_track.datasets import discover, load_ground_truth
-from logpolar_track.errors import UsageError
+from logpolar_track.errors import InputError
 from logpolar_track.evaluate import rotated_box_corners
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -105,7 +105,7 @@ def test_folder_of_folders_in_natural_order_and_empty(tmp_path):
     (tmp_path / "set" / "notes").mkdir()
     assert [s.name for s in discover(tmp_path / "set")] == ["a", "b2", "b10"]
     assert discover(tmp_path / "set" / "notes") == []
-    with pytest.raises(UsageError, match="does not exist"):
+    with pytest.raises(InputError, match="does not exist"):  # a missing input: exit 1, as a missing video
         discover(tmp_path / "missing")
 
 

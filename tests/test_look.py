@@ -121,6 +121,17 @@ def test_frame_command_refuses_to_overwrite_and_bad_indexes(tiny_video, tmp_path
     assert not (tmp_path / "g.png").exists()
 
 
+@pytest.mark.parametrize("command, name, accepted", [
+    ("frame", "f.jpg", ".png"), ("sheet", "s.jpg", ".png"), ("plot", "p.txt", ".png or .pdf or .svg"),
+    ("plot", "noextension", ".png or .pdf or .svg")])
+def test_an_output_name_of_the_wrong_type_is_a_usage_error(tiny_run, tmp_path, command, name, accepted):
+    video, run_csv, _ = tiny_run
+    args = {"frame": [video.path], "sheet": [video.path, run_csv], "plot": [run_csv, "--no-video"]}[command]
+    line = one_error_line(invoke(command, *args, "-o", tmp_path / name), 2)
+    assert f"give a file name ending in {accepted}" in line
+    assert list(tmp_path.glob("*" + name)) == [] and list(tmp_path.glob(".*")) == []
+
+
 def test_grid_lines_and_labels_are_at_their_pixel_positions():
     image = np.zeros((150, 230, 3), np.uint8)
     out = draw_grid(image, 50)

@@ -305,6 +305,15 @@ def test_tracker_params_from_text_converts_by_the_defaults_type():
     (["lpcf"], [("scale_filter", "2")], ["takes true or false (default True)"]),
     (["lpcf"], [("padding", "-1")], ["lpcf: padding must be"]),
     (["nosuch"], [("padding", "1")], ["unknown tracker 'nosuch'"]),
+    (["fixed"], [("window", "10")], ["fixed: window must be an odd number at least 3 and at most 101, got 10"]),
+    (["fixed"], [("window", "100001")], ["at most 101, got 100001"]),  # not 149 GiB of candidate samples
+    (["fixed"], [("n_rho", "0")], ["fixed: n_rho must be at least 8 and at most 512, got 0"]),
+    (["fixed"], [("lost_threshold", "5")], ["fixed: lost_threshold must be at least 0 and at most 1, got 5"]),
+    (["update"], [("update_threshold", "-3")], ["update: update_threshold must be at least 0"]),
+    (["occlusion"], [("inner_ratio", "2")], ["occlusion: inner_ratio must be above 0 and at most 0.95, got 2"]),
+    (["spatial"], [("n_scales", "4")], ["spatial: n_scales must be an odd number at least 1 and at most 31"]),
+    (["spatial"], [("scale_step", "0")], ["spatial: scale_step must be above 0"]),
+    (["cv-mil"], [("seed", "99999999999999999999")], ["cv-mil: seed must be at least 0 and at most 2147483647"]),
 ])
 def test_tracker_params_from_text_refuses_in_one_line(trackers, pairs, fragments):
     with pytest.raises(UsageError) as caught:

@@ -12,6 +12,8 @@ from ..bench import (STARTS, bench_document, collect_sequences, default_dataset,
                      matplotlib_missing, plot_curves, resolve_trackers, run_bench, summarise, write_text_atomic)
 from ..errors import UsageError
 from ..executor import TRACKING_OPENCV_THREADS
+from ..look import PLOT_SUFFIXES, check_image_suffix
+from ..video import check_output_path
 from . import EXIT_FAILURE, PARAM_HELP, OneLineErrors, main, parse_param_options
 
 
@@ -50,7 +52,7 @@ Examples:
 
 @main.command("bench", cls=OneLineErrors, epilog=_BENCH_EPILOG)
 @click.option("--dataset", "datasets", multiple=True, metavar="DIR",
-              type=click.Path(exists=True, path_type=Path),
+              type=click.Path(path_type=Path),
               help="Folder of sequences (repeatable). Default: sample_videos/ of the project.")
 @click.option("--trackers", metavar="A,B,...",
               help="Comma-separated tracker names. Default: every available lptrack tracker and OpenCV peer.")
@@ -77,11 +79,12 @@ Examples:
               help="Time the trackers instead (thesis Table 4.1 on a 640x480 synthetic video, one core) with "
                    "decode and 'lptrack run' baselines; uses --trackers, --json and --quiet only. "
                    "LPTRACK_SPEED_FRAMES sets the frames per sequence (default 100).")
+@click.option("--overwrite", is_flag=True, help="Replace existing --json and --plot files.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no notes on stderr.")
 def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, ...], json_out: str | None,
           per_frame: bool,
           plot_out: Path | None, jobs: int, scheduler: str | None, starts: int, threads: int | None, quiet: bool,
-          speed: bool) -> None:
+          speed: bool, overwrite: bool) -> None:
     """Run trackers over sequences with ground truth and compare them.
 
     Prints one row per sequence and tracker and a mean row per tracker:
@@ -92,6 +95,8 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     thesis' Table 4.1, decode and decode + encode baselines, and 'lptrack run'
     with and without video output as a share of them.
     """
+    # Outputs are checked before the work (a benchmark may run for hours), as `lptrack run` checks its own.
+    _check_json_out(json_out, overwrite)
     if speed:
         if datasets or per_frame or plot_out is not None or starts != 1 or threads is not None or params:
             raise UsageError("--speed times trackers on a synthetic video on one core; it takes no --dataset, "
@@ -99,9 +104,11 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
         _speed(trackers, json_out, quiet)
         return
     if plot_out is not None:
+        check_image_suffix(plot_out, PLOT_SUFFIXES, "plot")
         hint = matplotlib_missing()
         if hint:
             raise UsageError(hint)
+        check_output_path(plot_out, overwrite=overwrite, what="plot")
     if not datasets:
         found = default_dataset()
         if found is None:
@@ -109,9 +116,10 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
                              "source checkout lptrack runs from (a wheel install has none); give --dataset DIR "
                              "(lptrack samples, OTB, VOT or UAV123 folders), or run it in the checkout")
         datasets = (found,)
-    names, skipped = _runnable_trackers(trackers, quiet)
+    names, skipped = _runnable_trackers(trackers)
     tuning = parse_param_options(params, names)
     sequences = collect_sequences(datasets)
+    _note_skipped(skipped, quiet)
     threads = TRACKING_OPENCV_THREADS if threads is None else threads
 
     show_progress = not quiet and sys.stderr.isatty()
@@ -152,6 +160,12 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
         sys.exit(EXIT_FAILURE)
 
 
+def _check_json_out(json_out: str | None, overwrite: bool) -> None:
+    """Refuse, before any work, a --json file that cannot be written or exists without --overwrite."""
+    if json_out not in (None, "-"):
+        check_output_path(json_out, overwrite=overwrite, what="JSON output", special_ok=True)
+
+
 def _speed(trackers: str | None, json_out: str | None, quiet: bool) -> None:
     """``lptrack bench --speed``: the Table 4.1 reproduction (see :mod:`logpolar_track.speed`)."""
     from ..speed import format_report, frames_from_environment, speed_report
@@ -160,7 +174,8 @@ def _speed(trackers: str | None, json_out: str | None, quiet: bool) -> None:
         n_frames = frames_from_environment()
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    names, skipped = _runnable_trackers(trackers, quiet)
+    names, skipped = _runnable_trackers(trackers)
+    _note_skipped(skipped, quiet)
     show = not quiet and sys.stderr.isatty()
     doc = speed_report(names, n_frames=n_frames,
                        on_step=(lambda label: click.echo(f"lptrack: timing {label}", err=True)) if show else None)
@@ -169,15 +184,20 @@ def _speed(trackers: str | None, json_out: str | None, quiet: bool) -> None:
     _emit(table, doc, json_out)
 
 
-def _runnable_trackers(spec: str | None, quiet: bool) -> tuple[list[str], list[tuple[str, str]]]:
-    """The requested trackers that can run here, and (name, reason) for those skipped, noted on stderr."""
+def _runnable_trackers(spec: str | None) -> tuple[list[str], list[tuple[str, str]]]:
+    """The requested trackers that can run here, and (name, reason) for those skipped (see :func:`_note`)."""
     names, skipped = resolve_trackers(spec)
+    if not names:
+        reasons = "; ".join(f"{name}: {reason}" for name, reason in skipped)
+        raise UsageError(f"none of the requested trackers can run here ({reasons})")
+    return names, skipped
+
+
+def _note_skipped(skipped: list[tuple[str, str]], quiet: bool) -> None:
+    """The trackers skipped, noted on stderr once the arguments are known to be good (a bad one gets one line)."""
     if not quiet:
         for name, reason in skipped:
             click.echo(f"lptrack: note: skipping {name}: {reason}", err=True)
-    if not names:
-        raise UsageError("none of the requested trackers can run here")
-    return names, skipped
 
 
 def _emit(table: str, doc: dict | None, json_out: str | None) -> None:
@@ -194,11 +214,12 @@ def _emit(table: str, doc: dict | None, json_out: str | None) -> None:
 
 
 @main.command("eval", cls=OneLineErrors)
-@click.argument("prediction", metavar="PRED.csv", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@click.argument("ground_truth", metavar="GT", type=click.Path(exists=True, path_type=Path))
+@click.argument("prediction", metavar="PRED.csv", type=click.Path(path_type=Path))
+@click.argument("ground_truth", metavar="GT", type=click.Path(path_type=Path))
 @click.option("--json", "json_out", metavar="PATH|-", help="Write the metrics (and per-frame arrays) as JSON; "
                                                            "'-' for stdout instead of the table.")
-def eval_command(prediction: Path, ground_truth: Path, json_out: str | None) -> None:
+@click.option("--overwrite", is_flag=True, help="Replace an existing --json file.")
+def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, overwrite: bool) -> None:
     """Score a run's CSV (PRED.csv from 'lptrack run') against ground truth GT.
 
     GT is a <name>.gt.csv, an OTB groundtruth_rect.txt, a VOT groundtruth.txt,
@@ -208,6 +229,7 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None) -> 
     """
     from ..datasets import load_ground_truth
     from ..evaluate import read_track_csv, score_track
+    _check_json_out(json_out, overwrite)
 
     track = read_track_csv(prediction)
     gt = load_ground_truth(ground_truth)
@@ -215,6 +237,10 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None) -> 
     if metrics["frames_scored"] == 0:
         raise UsageError(f"no frame of '{prediction}' has ground truth in '{ground_truth}' (frames are matched "
                          "by index, 0 = first frame)")
+    if metrics["frames_missing"]:
+        total = metrics["frames_scored"] + metrics["frames_missing"]
+        click.echo(f"lptrack: note: '{prediction}' has no row for {metrics['frames_missing']} of the {total} frames "
+                   f"with ground truth; they are not scored", err=True)
     row = {"sequence": prediction.name, "tracker": "(csv)", **metrics}
     table = format_table([row], [], speed=False)
     if json_out is None:

@@ -12,9 +12,9 @@ import click
 
 from ..errors import UsageError
 from ..geometry import check_roi_fits
-from ..look import (ROUND_TOLERANCE, SHEET_ROWS, describe_video_search, find_video_for_csv, matplotlib_hint,
-                    plot_track, read_frame, read_run_csv, roi_from_box, roi_from_points, write_contact_sheet,
-                    write_frame_png)
+from ..look import (PLOT_SUFFIXES, ROUND_TOLERANCE, SHEET_ROWS, check_image_suffix, describe_video_search,
+                    find_video_for_csv, matplotlib_hint, plot_track, read_frame, read_run_csv, roi_from_box,
+                    roi_from_points, write_contact_sheet, write_frame_png)
 from . import OneLineErrors, main, parse_roi_option
 
 
@@ -117,7 +117,7 @@ Examples:
 """)
 @click.argument("run_csv", type=click.Path(dir_okay=False, path_type=Path), metavar="RUN.csv")
 @click.option("-o", "--out", "out_png", type=click.Path(dir_okay=False, path_type=Path), metavar="PNG",
-              help="PNG to write. Default: <RUN stem>.plot.png in the current folder.")
+              help="Figure to write: .png, or .pdf or .svg. Default: <RUN stem>.plot.png in the current folder.")
 @click.option("--gt", "gt_path", type=click.Path(dir_okay=False, path_type=Path), metavar="GT",
               help="Ground truth to overlay and score: lptrack .gt.csv, OTB/UAV123 x,y,w,h .txt, VOT "
                    "groundtruth.txt.")
@@ -136,6 +136,8 @@ def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path 
     rotation deg). Needs matplotlib: pip install matplotlib.
     Prints the PNG's path on stdout.
     """
+    if out_png is not None:
+        check_image_suffix(out_png, PLOT_SUFFIXES, "output image")
     hint = matplotlib_hint()
     if hint:
         raise UsageError(hint)

@@ -387,9 +387,11 @@ def _report(summary: BatchSummary, *, quiet: bool) -> None:
         parts.append(f"{summary.count('failed')} failed")
         ran = summary.count("ok") + summary.count("failed")
         count = len(summary.outcomes)
+        # Rates only where something was tracked: a batch whose videos all failed at once has none worth a number.
+        rates = (f" ({summary.frames / seconds:.1f} frames/s, {ran / seconds:.2f} videos/s)" if summary.frames
+                 else "")
         click.echo(f"lptrack: {count} video{'' if count == 1 else 's'}: {', '.join(parts)}; {summary.frames} "
-                   f"frames in {summary.seconds:.1f} s ({summary.frames / seconds:.1f} frames/s, "
-                   f"{ran / seconds:.2f} videos/s)", err=True)
+                   f"frames in {summary.seconds:.1f} s{rates}", err=True)
         for outcome in summary.outcomes:
             if outcome.truncated:
                 click.echo(f"lptrack: warning: {_truncation(outcome.label, outcome.frames, outcome.expected_frames)}",

@@ -186,6 +186,32 @@ def _finite(sim: Similarity) -> bool:
     return all(math.isfinite(v) for v in (sim.cx, sim.cy, sim.scale, sim.rotation_deg)) and sim.scale > 0
 
 
+#: Largest search window of the thesis trackers and the spatial baseline, pixels a side: 101 x 101 centres
+#: already take seconds a frame, and much larger ones exhaust memory.
+MAX_WINDOW = 101
+
+
+def check_ranges(tracker, ranges: dict[str, tuple[float, float | None]], *, positive=frozenset(),
+                 odd=frozenset()) -> None:
+    """Raise :class:`UsageError` naming the first of ``tracker``'s parameters (attributes) outside its ``(low,
+    high)`` range: inclusive, but exclusive at a low of 0 for names in ``positive``; ``high`` None is unbounded;
+    values must be finite, and odd for names in ``odd``. One line says what is accepted."""
+    for name, (low, high) in ranges.items():
+        value = getattr(tracker, name)
+        above = value > low if name in positive else value >= low
+        if not (math.isfinite(value) and above and (high is None or value <= high)
+                and (name not in odd or value % 2 == 1)):
+            lower = f"above {_number(low)}" if name in positive else f"at least {_number(low)}"
+            accepted = lower if high is None else f"{lower} and at most {_number(high)}"
+            accepted = f"an odd number {accepted}" if name in odd else accepted
+            raise UsageError(f"{tracker.name}: {name} must be {accepted}, got {_number(value)}")
+
+
+def _number(value) -> str:
+    """Whole numbers in full, others as ``%g``."""
+    return str(value) if isinstance(value, int) else f"{value:g}"
+
+
 _REGISTRY: dict[str, Callable[..., Tracker]] = {}
 
 
@@ -299,5 +325,10 @@ def tracker_params_from_text(trackers: Iterable[str], assignments: Iterable[tupl
             params[tracker][key] = _converted(tracker, key, text, taken[tracker][key])
     for tracker, chosen in params.items():
         if chosen:
-            create_tracker(tracker, **chosen)  # the tracker checks its ranges (one clear line) now, not per video
+            try:
+                create_tracker(tracker, **chosen)  # the tracker checks its ranges (one clear line) now, not per video
+            except UsageError:
+                raise
+            except (TypeError, ValueError, OverflowError) as exc:  # a tracker that does not say it in lptrack's terms
+                raise UsageError(f"{tracker}: {exc}") from None
     return params

@@ -89,7 +89,7 @@ from ..geometry import Ellipse
 from ..logpolar import LogPolarGrid, PhaseCorrelator, to_gray
 from ..refine import AppearanceSubspace, similarity_step
 from ..scale_filter import ScaleFilter
-from .base import Similarity, SimilarityTracker, TrackState, register
+from .base import Similarity, SimilarityTracker, TrackState, check_ranges, register
 
 
 @register
@@ -321,7 +321,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.colour_weight = float(colour_weight)
         self.scale_filter, self.scale_filter_rate = bool(scale_filter), float(scale_filter_rate)
         # Ranges: (low, high), inclusive, None unbounded; a low of 0.0 in _POSITIVE is exclusive.
-        _check_ranges(self, {
+        check_ranges(self, {
             "padding": (0.0, 10.0), "patch_samples": (16, 1024), "learning_rate": (0.0, 1.0),
             "lp_learning_rate": (0.0, 1.0), "n_rho": (8, 512), "n_theta": (8, 1024), "lost_threshold": (0.0, 1.0),
             "psr_learn": (0.0, None), "lp_min_height": (0.0, 1.0), "max_scale_step": (0.0, 1.0),
@@ -331,7 +331,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             "level_rate": (0.0, 1.0), "redetect_after": (1, None), "trust_low": (0.0, 1.0), "trust_high": (0.0, 1.0),
             "learn_every": (1, None), "lp_extent": (0.5, 10.0), "drop_ratio": (0.0, 1.0), "refine_steps": (0, 10),
             "subspace_components": (0, 12), "refine_max_distance": (0.0, 1.0), "colour_weight": (0.0, 1.0),
-            "scale_filter_rate": (0.0, 1.0)})
+            "scale_filter_rate": (0.0, 1.0)}, positive=_POSITIVE)
         if self.trust_low >= self.trust_high:
             raise UsageError(f"{self.name}: trust_low must be below trust_high, got {self.trust_low} and "
                              f"{self.trust_high}")
@@ -1562,18 +1562,6 @@ _SHOWN_MAX_RATIO = 2.0
 #: Parameters that must be above their lower bound of 0, not equal to it (rates, widths, limits).
 _POSITIVE = {"learning_rate", "lp_learning_rate", "max_scale_step", "max_rotation_step", "regularisation",
              "label_sigma", "window_power", "scale_sigma", "rotation_sigma", "level_rate", "scale_filter_rate"}
-
-
-def _check_ranges(tracker, ranges: dict[str, tuple[float, float | None]]) -> None:
-    """Raise :class:`UsageError` naming the first parameter outside its ``(low, high)`` range (inclusive, but
-    exclusive at 0 for :data:`_POSITIVE`; None: unbounded) or not finite."""
-    for name, (low, high) in ranges.items():
-        value = getattr(tracker, name)
-        above = value > low if name in _POSITIVE else value >= low
-        if not (math.isfinite(value) and above and (high is None or value <= high)):
-            lower = f"above {low:g}" if name in _POSITIVE else f"at least {low:g}"
-            accepted = lower if high is None else f"{lower} and at most {high:g}"
-            raise UsageError(f"{tracker.name}: {name} must be {accepted}, got {value:g}")
 
 
 def _filter_prefers_old(psr: float, psr_before: float, lp_height: float) -> bool:

@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from ..geometry import Ellipse
-from .base import Tracker, TrackState, check_frame, check_start, register
+from .base import Tracker, TrackState, check_frame, check_ranges, check_start, register
 
 _CONTRIB_HINT = ("needs opencv-contrib-python-headless instead of opencv-python-headless "
                  "(swap them: pip uninstall opencv-python-headless && pip install opencv-contrib-python-headless)")
@@ -42,6 +42,7 @@ class _OpenCVTracker(Tracker):
 
     def __init__(self, *, seed: int = 0):
         self.seed = int(seed)
+        check_ranges(self, {"seed": (0, 2 ** 31 - 1)})  # cv2.setRNGSeed takes a C int
         self._tracker = None
         self._size0 = 1.0
         self._last: TrackState | None = None

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..geometry import Ellipse
 from ..logpolar import parabola_peak_2d
-from .base import Similarity, SimilarityTracker, register
+from .base import MAX_WINDOW, Similarity, SimilarityTracker, check_ranges, register
 
 
 @register
@@ -49,15 +49,12 @@ class SpatialTracker(SimilarityTracker):
     def __init__(self, *, window: int = 11, n_scales: int = 5, n_angles: int = 5, scale_step: float = 0.02,
                  angle_step_deg: float = 2.0, lost_threshold: float = 0.5):
         super().__init__(lost_threshold=lost_threshold)
-        if window < 3 or window % 2 == 0:
-            raise ValueError(f"window must be an odd number >= 3 pixels, got {window}")
-        if n_scales < 1 or n_scales % 2 == 0 or n_angles < 1 or n_angles % 2 == 0:
-            raise ValueError(f"n_scales and n_angles must be odd numbers >= 1, got {n_scales} and {n_angles}")
-        if not scale_step > 0 or not angle_step_deg > 0:
-            raise ValueError("scale_step and angle_step_deg must be > 0")
         self.window, self.n_scales, self.n_angles = int(window), int(n_scales), int(n_angles)
-        self.log_scale_step = math.log1p(scale_step)
-        self.angle_step_deg = float(angle_step_deg)
+        self.scale_step, self.angle_step_deg = float(scale_step), float(angle_step_deg)
+        check_ranges(self, {"window": (3, MAX_WINDOW), "n_scales": (1, 31), "n_angles": (1, 31),
+                            "scale_step": (0.0, 0.5), "angle_step_deg": (0.0, 45.0), "lost_threshold": (0.0, 1.0)},
+                     positive={"scale_step", "angle_step_deg"}, odd={"window", "n_scales", "n_angles"})
+        self.log_scale_step = math.log1p(self.scale_step)
 
     def _start(self, gray: np.ndarray, roi: Ellipse) -> None:
         self.first = gray

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..geometry import Ellipse
 from ..logpolar import LogPolarGrid, PhaseCorrelator, Peak, find_peaks, parabola_peak_2d
-from .base import Similarity, SimilarityTracker, register
+from .base import MAX_WINDOW, Similarity, SimilarityTracker, check_ranges, register
 
 
 class LogPolarMatcher:
@@ -113,10 +113,10 @@ class _WindowSearch(SimilarityTracker):
     def __init__(self, *, window: int = 11, n_rho: int = 64, n_theta: int = 128, lost_threshold: float = 0.2,
                  coarse: bool = True):
         super().__init__(lost_threshold=lost_threshold)
-        if window < 3 or window % 2 == 0:
-            raise ValueError(f"window must be an odd number >= 3 pixels, got {window}")
         self.window = int(window)
         self.n_rho, self.n_theta = int(n_rho), int(n_theta)
+        check_ranges(self, {"window": (3, MAX_WINDOW), "n_rho": (8, 512), "n_theta": (16, 1024),
+                            "lost_threshold": (0.0, 1.0)}, odd={"window"})
         self.offsets = window_offsets(self.window)
         self.coarse = bool(coarse)
 
@@ -289,9 +289,8 @@ class TemplateUpdateTracker(FixedTemplateTracker):
 
     def __init__(self, *, update_threshold: float = 0.35, **kwargs):
         super().__init__(**kwargs)
-        if not 0 <= update_threshold <= 1:
-            raise ValueError(f"update_threshold must be from 0 to 1, got {update_threshold}")
         self.update_threshold = float(update_threshold)
+        check_ranges(self, {"update_threshold": (0.0, 1.0)})
 
     def _start(self, gray: np.ndarray, roi: Ellipse) -> None:
         super()._start(gray, roi)
@@ -341,9 +340,9 @@ class TwoTemplateTracker(_WindowSearch):
 
     def __init__(self, *, inner_ratio: float = 0.6, inner_weight: float = 0.7, **kwargs):
         super().__init__(**kwargs)
-        if not 0 < inner_ratio < 1 or not 0 <= inner_weight <= 1:
-            raise ValueError("inner_ratio must be in (0, 1) and inner_weight in [0, 1]")
         self.inner_ratio, self.inner_weight = float(inner_ratio), float(inner_weight)
+        # An inner circle as large as the outer one would be no second template.
+        check_ranges(self, {"inner_ratio": (0.0, 0.95), "inner_weight": (0.0, 1.0)}, positive={"inner_ratio"})
 
     def _start(self, gray: np.ndarray, roi: Ellipse) -> None:
         centre = np.array([[roi.cx, roi.cy]])

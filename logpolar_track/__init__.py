@@ -7,7 +7,7 @@ frame) and :func:`run_video` (what ``lptrack run`` does: annotated video and CSV
 import importlib
 from importlib.metadata import PackageNotFoundError, version
 
-from .errors import LptrackError, OutputError, RoiError, UsageError, VideoError
+from .errors import InputError, LptrackError, OutputError, RoiError, UsageError, VideoError
 
 try:
     __version__ = version("logpolar-track")
@@ -22,7 +22,8 @@ _LAZY = {"Ellipse": "geometry", "parse_roi": "geometry", "Tracker": "trackers", 
          "run_video": "pipeline"}
 
 __all__ = ["Ellipse", "parse_roi", "Tracker", "TrackState", "create_tracker", "tracker_names", "track_video",
-           "run_video", "LptrackError", "RoiError", "VideoError", "OutputError", "UsageError", "__version__"]
+           "run_video", "LptrackError", "RoiError", "VideoError", "InputError", "OutputError", "UsageError",
+           "__version__"]
 
 
 def __getattr__(name: str):

@@ -92,7 +92,8 @@ class VideoJob:
     overwrite: bool = False
     stream: bool = False
     max_frames: int | None = None
-    tracker_params: Mapping[str, object] | None = None
+    #: Keyword tuning of ``tracker`` (a dict: left out of the job's hash).
+    tracker_params: Mapping[str, object] | None = field(default=None, hash=False)
 
 
 @dataclass(frozen=True)

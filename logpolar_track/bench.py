@@ -32,6 +32,7 @@ from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCE
                        auc, score_track)
 from .executor import TRACKING_OPENCV_THREADS, opencv_threads, run_tasks
 from .geometry import Ellipse
+from .look import PLOT_SUFFIXES, check_image_suffix
 from .trackers import create_tracker, tracker_class, tracker_names
 from .video import writes_in_place
 from .trackers import opencv as _opencv_peers  # noqa: F401  (registers cv-mil, cv-kcf, cv-csrt)
@@ -506,17 +507,19 @@ def matplotlib_missing() -> str | None:
 
 
 def plot_curves(summary: list[dict], path) -> None:
-    """Save OTB-style success (IoU) and precision (centre error) plots, one curve per tracker, as a PNG.
+    """Save OTB-style success (IoU) and precision (centre error) plots, one curve per tracker, as a PNG (or PDF
+    or SVG, as ``path`` ends).
 
     The legend gives each tracker's success AUC and precision at 20 px (means over sequences).
 
     Raises
     ------
     UsageError
-        If matplotlib is not installed.
+        If matplotlib is not installed, or ``path`` does not end in .png, .pdf or .svg.
     OutputError
         If the file cannot be written.
     """
+    check_image_suffix(path, PLOT_SUFFIXES, "plot")
     hint = matplotlib_missing()
     if hint:
         raise UsageError(hint)

@@ -273,6 +273,8 @@ def write_png(path, image: np.ndarray, *, overwrite: bool = False, what: str = "
 
     Raises
     ------
+    UsageError
+        ``path`` does not end in .png.
     OutputError
         Folder missing or unwritable, file exists without ``overwrite``, or encoding failed.
     """

@@ -109,10 +109,7 @@ def _make_tracker(tracker: str | Tracker, params: dict | None) -> Tracker:
         if params:
             raise UsageError("tracker_params apply only when the tracker is given by name")
         return tracker
-    try:
-        return create_tracker(str(tracker), **(params or {}))
-    except TypeError as exc:  # an unknown keyword in params
-        raise UsageError(f"bad parameters for tracker '{tracker}': {exc}") from None
+    return create_tracker(str(tracker), **(params or {}))
 
 
 def _track(reader: VideoReader, roi: Ellipse, tracker: Tracker,

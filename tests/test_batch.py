@@ -268,6 +268,19 @@ def test_bad_param_stops_a_batch_before_any_video(work):
     assert result.exit_code == 2 and not (work / "out").exists()
     assert result.stderr.startswith("lptrack: error: no parameter 'window' in lpcf: lpcf takes padding (1.0), ")
     assert len(result.stderr.strip().splitlines()) == 1
+    # Checked against the trackers of the videos that run: here the ROI file gives every one the thesis tracker,
+    # so an lpcf parameter is used by none (the default tracker, lpcf, tracks nothing) and is refused.
+    (work / "rois.csv").write_text("footage/day1/a.mp4,80,60,20,0,fixed\n")
+    result = invoke("--roi-file", "rois.csv", "--out-dir", "out", "--no-video", "--param", "learning_rate=0.5")
+    assert result.exit_code == 2 and not (work / "out").exists()
+    assert result.stderr.startswith("lptrack: error: no parameter 'learning_rate' in fixed: fixed takes window (11)")
+
+
+def test_video_jobs_stay_hashable_with_tracker_params(work):
+    plan = plan_batch(find_videos(["footage/day1"]), roi=Ellipse.circle(80, 60, 20), out_dir="out",
+                      tracker_params={"lpcf": {"learning_rate": 0.05}})
+    assert len({hash(job) for job in plan.jobs}) == 2
+    assert [job.tracker_params for job in plan.jobs] == [{"learning_rate": 0.05}] * 2
 
 
 def test_roi_file_parsing(tmp_path):

@@ -377,6 +377,24 @@ def test_param_tunes_the_tracker_as_tracker_params_do(tiny_video, workdir):
     assert tuned != (workdir / "default.csv").read_text()
 
 
+def test_running_out_of_memory_is_one_line_and_leaves_no_output(tiny_video, workdir, monkeypatch):
+    class Greedy(Tracker):
+        name = "greedy-test"
+
+        def init(self, frame, roi):
+            return TrackState(roi, 1.0, 0.0, 1.0)
+
+        def update(self, frame):
+            raise MemoryError("Unable to allocate 149. GiB")
+
+    monkeypatch.setattr(pipeline, "_make_tracker", lambda tracker, params: Greedy())
+    result = invoke(tiny_video.path)
+    assert result.exit_code == 1 and result.stdout == ""
+    assert result.stderr == ("lptrack: error: out of memory; a smaller video, fewer --jobs or smaller tracker "
+                             "parameters need less\n")
+    assert listing(workdir) == []
+
+
 def test_param_of_a_thesis_tracker(tiny_video, workdir):
     # A match never reaches 1: with lost_threshold=1 every frame after the first is reported lost.
     result = invoke(tiny_video.path, "--no-video", "--csv", "-", "--tracker", "fixed", "--param", "lost_threshold=1")

@@ -302,7 +302,7 @@ def test_tracker_params_from_text_converts_by_the_defaults_type():
     (["lpcf"], [("padding", "wide")], ["lpcf: parameter padding takes a finite number (default 1.0), got 'wide'"]),
     (["lpcf"], [("padding", "nan")], ["takes a finite number"]),
     (["lpcf"], [("patch_samples", "64.0")], ["takes a whole number (default 64)"]),
-    (["lpcf"], [("scale_filter", "2")], ["takes true or false (default True)"]),
+    (["lpcf"], [("scale_filter", "2")], ["takes true or false (or yes/no, on/off, 1/0) (default True), got '2'"]),
     (["lpcf"], [("padding", "-1")], ["lpcf: padding must be"]),
     (["nosuch"], [("padding", "1")], ["unknown tracker 'nosuch'"]),
     (["fixed"], [("window", "10")], ["fixed: window must be an odd number at least 3 and at most 101, got 10"]),
@@ -314,9 +314,31 @@ def test_tracker_params_from_text_converts_by_the_defaults_type():
     (["spatial"], [("n_scales", "4")], ["spatial: n_scales must be an odd number at least 1 and at most 31"]),
     (["spatial"], [("scale_step", "0")], ["spatial: scale_step must be above 0"]),
     (["cv-mil"], [("seed", "99999999999999999999")], ["cv-mil: seed must be at least 0 and at most 2147483647"]),
+    (["fixed"], [("window", "1" + "0" * 50)], ["at most 101, got a 51-digit number"]),
+    # Each in range, together gigabytes of sampling maps (and a traceback, before these checks).
+    (["fixed"], [("coarse", "false"), ("window", "101"), ("n_rho", "512"), ("n_theta", "1024")],
+     ["fixed: window^2 x n_rho x n_theta (101^2 x 512 x 1024) come to 5,348,261,888 samples a frame"]),
+    (["spatial"], [("n_scales", "31"), ("scale_step", "0.5")], ["spatial: the grid must span at most half to double"]),
+    (["spatial"], [("n_angles", "31"), ("angle_step_deg", "45")], ["angle_step_deg x (n_angles // 2) is 675"]),
 ])
 def test_tracker_params_from_text_refuses_in_one_line(trackers, pairs, fragments):
+    # (Every case also holds for the CLI: tests/test_cli_run.py runs some through `lptrack run --param`.)
     with pytest.raises(UsageError) as caught:
         tracker_params_from_text(trackers, pairs)
     message = str(caught.value)
     assert "\n" not in message and all(f in message for f in fragments), message
+
+
+def test_a_parameter_only_a_skipped_tracker_takes_is_named_as_such():
+    with pytest.raises(UsageError) as caught:
+        tracker_params_from_text(["fixed"], [("seed", "1")], skipped=["cv-kcf"])
+    assert str(caught.value).endswith("(cv-kcf takes it but cannot run here)")
+
+
+def test_create_tracker_reports_any_bad_keyword_as_a_usage_error():
+    with pytest.raises(UsageError, match="bad parameters for tracker 'lpcf': .*unexpected keyword"):
+        create_tracker("lpcf", nosuch=1)
+    with pytest.raises(UsageError, match="bad parameters for tracker 'fixed'"):
+        create_tracker("fixed", window=float("inf"))  # int(inf): OverflowError in the constructor
+    with pytest.raises(UsageError, match="bad parameters for tracker 'lpcf'"):
+        create_tracker("lpcf", padding="wide")  # float('wide'): ValueError in the constructor

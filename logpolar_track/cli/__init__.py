@@ -98,6 +98,12 @@ class LptrackGroup(click.Group):
                 raise
             click.echo(f"lptrack: error: {exc}", err=True)
             ctx.exit(exc.exit_code)
+        except MemoryError:  # NumPy's allocation failures too; outputs were removed as on any failure
+            if os.environ.get("LPTRACK_DEBUG"):
+                raise
+            click.echo("lptrack: error: out of memory; a smaller video, fewer --jobs or smaller tracker parameters "
+                       "need less", err=True)
+            ctx.exit(EXIT_FAILURE)
         except Terminated as exc:
             if os.environ.get("LPTRACK_DEBUG"):
                 raise
@@ -149,9 +155,9 @@ PARAM_HELP = ("Tracker tuning, e.g. --param learning_rate=0.03 (repeatable): goe
               "an unknown NAME gets the list of those they take, with their defaults.")
 
 
-def parse_param_options(assignments: tuple[str, ...], trackers) -> dict[str, dict]:
+def parse_param_options(assignments: tuple[str, ...], trackers, skipped=()) -> dict[str, dict]:
     """``--param NAME=VALUE`` texts as ``{tracker: {NAME: value}}`` for ``trackers``
-    (:func:`~logpolar_track.trackers.tracker_params_from_text`)."""
+    (:func:`~logpolar_track.trackers.tracker_params_from_text`; ``skipped``: trackers that cannot run here)."""
     from ..trackers import tracker_params_from_text
 
     pairs = []
@@ -160,7 +166,7 @@ def parse_param_options(assignments: tuple[str, ...], trackers) -> dict[str, dic
         if not sep or not key.strip() or not value.strip():
             raise UsageError(f"--param takes NAME=VALUE (e.g. --param learning_rate=0.03), got '{text}'")
         pairs.append((key.strip(), value.strip()))
-    return tracker_params_from_text(trackers, pairs)
+    return tracker_params_from_text(trackers, pairs, skipped=skipped)
 
 
 # Sub-commands register themselves on `main` when imported; one import line per command module.

@@ -77,7 +77,7 @@ Examples:
                    "frames/s compare per core (more lets OpenCV's CSRT spread its work over cores).")
 @click.option("--speed", is_flag=True,
               help="Time the trackers instead (thesis Table 4.1 on a 640x480 synthetic video, one core) with "
-                   "decode and 'lptrack run' baselines; uses --trackers, --json and --quiet only. "
+                   "decode and 'lptrack run' baselines; uses --trackers, --json, --overwrite and --quiet only. "
                    "LPTRACK_SPEED_FRAMES sets the frames per sequence (default 100).")
 @click.option("--overwrite", is_flag=True, help="Replace existing --json and --plot files.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no notes on stderr.")
@@ -95,12 +95,13 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     thesis' Table 4.1, decode and decode + encode baselines, and 'lptrack run'
     with and without video output as a share of them.
     """
-    # Outputs are checked before the work (a benchmark may run for hours), as `lptrack run` checks its own.
-    _check_json_out(json_out, overwrite)
     if speed:
         if datasets or per_frame or plot_out is not None or starts != 1 or threads is not None or params:
             raise UsageError("--speed times trackers on a synthetic video on one core; it takes no --dataset, "
                              "--per-frame, --plot, --starts, --threads or --param")
+    # Outputs are checked before the work (a benchmark may run for hours), as `lptrack run` checks its own.
+    _check_json_out(json_out, overwrite)
+    if speed:
         _speed(trackers, json_out, quiet)
         return
     if plot_out is not None:
@@ -117,7 +118,7 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
                              "(lptrack samples, OTB, VOT or UAV123 folders), or run it in the checkout")
         datasets = (found,)
     names, skipped = _runnable_trackers(trackers)
-    tuning = parse_param_options(params, names)
+    tuning = parse_param_options(params, names, [name for name, _ in skipped])
     sequences = collect_sequences(datasets)
     _note_skipped(skipped, quiet)
     threads = TRACKING_OPENCV_THREADS if threads is None else threads

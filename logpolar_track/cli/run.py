@@ -12,6 +12,7 @@ import os
 import select
 import sys
 import textwrap
+from dataclasses import replace
 from pathlib import Path
 
 import click
@@ -194,7 +195,6 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     if not videos and not entries:  # without VIDEO arguments the ROI file's videos are the inputs
         raise UsageError(f"no videos found in ROI file '{roi_file}': write one line per video, "
                          f"video,roi[,start_frame][,tracker]")
-    tuning = parse_param_options(params, [tracker] + [e.tracker for e in entries if e.tracker]) if params else None
 
     def named_again(path: Path) -> None:
         if not quiet:
@@ -208,8 +208,13 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
                           else ""))
     plan = plan_batch(inputs, roi=roi, roi_entries=entries, tracker=tracker, start_frame=start_frame,
                       max_frames=max_frames, out_dir=out_dir or ".", video=not no_video, stream=stream,
-                      data_format=data_format, overwrite=overwrite, skip_existing=skip_existing,
-                      tracker_params=tuning)
+                      data_format=data_format, overwrite=overwrite, skip_existing=skip_existing)
+    if params:
+        # Checked against the trackers of the videos that will run, so that a parameter none of them takes is
+        # an error, not silently unused.
+        used = list(dict.fromkeys(job.tracker for job in plan.jobs)) or [tracker]
+        tuning = parse_param_options(params, used)
+        plan = replace(plan, jobs=[replace(job, tracker_params=tuning[job.tracker]) for job in plan.jobs])
     # The folder is made (or refused, in one line) once, up front; if the batch leaves nothing in it, it goes.
     created = make_output_folder(out_dir) if out_dir is not None else []
     try:

@@ -15,7 +15,7 @@ from typing import Callable, ClassVar, Iterable
 
 import numpy as np
 
-from ..errors import UsageError
+from ..errors import LptrackError, UsageError
 from ..geometry import Ellipse, check_roi_fits
 from ..logpolar import to_gray
 
@@ -190,6 +190,18 @@ def _finite(sim: Similarity) -> bool:
 #: already take seconds a frame, and much larger ones exhaust memory.
 MAX_WINDOW = 101
 
+#: Most samples a thesis tracker's search may take from one frame (window centres x log-polar samples): the
+#: defaults take about 1 million (121 x 64 x 128), and sampling maps of this many float32 take 256 MB each.
+MAX_SEARCH_SAMPLES = 1 << 26
+
+
+def check_sampling_size(tracker, samples: float, what: str) -> None:
+    """Raise :class:`UsageError` if ``samples`` (what one frame's search samples, from ``tracker``'s parameters
+    together) exceeds :data:`MAX_SEARCH_SAMPLES`: each parameter in range can still combine into gigabytes."""
+    if samples > MAX_SEARCH_SAMPLES:
+        raise UsageError(f"{tracker.name}: {what} come to {samples:,.0f} samples a frame, more than the "
+                         f"{MAX_SEARCH_SAMPLES:,} allowed (256 MB a float32 sampling map); choose smaller ones")
+
 
 def check_ranges(tracker, ranges: dict[str, tuple[float, float | None]], *, positive=frozenset(),
                  odd=frozenset()) -> None:
@@ -199,7 +211,7 @@ def check_ranges(tracker, ranges: dict[str, tuple[float, float | None]], *, posi
     for name, (low, high) in ranges.items():
         value = getattr(tracker, name)
         above = value > low if name in positive else value >= low
-        if not (math.isfinite(value) and above and (high is None or value <= high)
+        if not ((isinstance(value, int) or math.isfinite(value)) and above and (high is None or value <= high)
                 and (name not in odd or value % 2 == 1)):
             lower = f"above {_number(low)}" if name in positive else f"at least {_number(low)}"
             accepted = lower if high is None else f"{lower} and at most {_number(high)}"
@@ -208,8 +220,11 @@ def check_ranges(tracker, ranges: dict[str, tuple[float, float | None]], *, posi
 
 
 def _number(value) -> str:
-    """Whole numbers in full, others as ``%g``."""
-    return str(value) if isinstance(value, int) else f"{value:g}"
+    """Whole numbers in full (up to 20 digits), others as ``%g``."""
+    if isinstance(value, int):
+        text = str(value)
+        return text if len(text) <= 20 else f"a {len(text.lstrip('-'))}-digit number"
+    return f"{value:g}"
 
 
 _REGISTRY: dict[str, Callable[..., Tracker]] = {}
@@ -233,15 +248,29 @@ def tracker_class(name: str):
     try:
         return _REGISTRY[name]
     except KeyError:
-        raise UsageError(f"unknown tracker '{name}'; choose one of: {', '.join(tracker_names())}") from None
+        # Every registered name, those this install cannot run included: naming one of them then says what to
+        # install (create_tracker), rather than that it does not exist.
+        raise UsageError(f"unknown tracker '{name}'; choose one of: "
+                         f"{', '.join(tracker_names(include_unavailable=True))}") from None
 
 
 def create_tracker(name: str, **params) -> Tracker:
-    """A new tracker of the registered kind ``name`` with keyword tuning ``params``."""
+    """A new tracker of the registered kind ``name`` with keyword tuning ``params``.
+
+    Raises
+    ------
+    UsageError
+        An unknown or unavailable tracker, or ``params`` it does not take or accept.
+    """
     cls = tracker_class(name)
     if not getattr(cls, "available", lambda: True)():
         raise UsageError(f"tracker '{name}' is not available here: {cls.unavailable_reason()}")
-    return cls(**params)
+    try:
+        return cls(**params)
+    except LptrackError:
+        raise
+    except (TypeError, ValueError, OverflowError) as exc:  # an unknown keyword, or a check not in lptrack's terms
+        raise UsageError(f"bad parameters for tracker '{name}': {exc}") from None
 
 
 def tracker_parameters(name: str) -> dict[str, object]:
@@ -273,6 +302,9 @@ _TRUE, _FALSE = ("true", "yes", "on", "1"), ("false", "no", "off", "0")
 def _converted(tracker: str, key: str, text: str, default: object) -> object:
     """``text`` as a value of ``default``'s type, or a UsageError saying what the parameter takes."""
     kind = type(default)
+    if kind not in (bool, int, float, str):
+        raise UsageError(f"{tracker}: parameter {key} cannot be given as text (default {default!r}); set it from "
+                         f"Python (create_tracker)")
     try:
         if kind is bool:
             if text.strip().lower() in _TRUE + _FALSE:
@@ -286,18 +318,22 @@ def _converted(tracker: str, key: str, text: str, default: object) -> object:
                 raise ValueError
             return value
     except ValueError:
-        what = {bool: "true or false", int: "a whole number", float: "a finite number"}[kind]
+        what = {bool: "true or false (or yes/no, on/off, 1/0)", int: "a whole number",
+                float: "a finite number"}[kind]
         raise UsageError(f"{tracker}: parameter {key} takes {what} (default {default}), got '{text}'") from None
     return text
 
 
-def tracker_params_from_text(trackers: Iterable[str], assignments: Iterable[tuple[str, str]]
-                             ) -> dict[str, dict[str, object]]:
+def tracker_params_from_text(trackers: Iterable[str], assignments: Iterable[tuple[str, str]], *,
+                             skipped: Iterable[str] = ()) -> dict[str, dict[str, object]]:
     """Keyword tuning for each of ``trackers`` from ``(name, value text)`` pairs, as ``--param`` gives them.
 
     Each pair goes to the trackers that take a parameter of that name, its value converted to the type of
     the parameter's default (``true``/``false``, whole numbers, finite numbers, or text); a later pair of the
     same name replaces an earlier one. Each tracker given parameters is made once, which checks their ranges.
+
+    ``skipped`` names trackers asked for that cannot run here: a name only they take is still an error, and
+    its message says so.
 
     Returns
     -------
@@ -320,15 +356,13 @@ def tracker_params_from_text(trackers: Iterable[str], assignments: Iterable[tupl
                                                        or "none")
                                 for tracker in trackers)
             who = trackers[0] if len(trackers) == 1 else f"any of {', '.join(trackers)}"
+            absent = [name for name in skipped if key in tracker_parameters(name)]
+            if absent:
+                listing += f" ({', '.join(absent)} {'takes' if len(absent) == 1 else 'take'} it but cannot run here)"
             raise UsageError(f"no parameter '{key}' in {who}: {listing}")
         for tracker in takers:
             params[tracker][key] = _converted(tracker, key, text, taken[tracker][key])
     for tracker, chosen in params.items():
         if chosen:
-            try:
-                create_tracker(tracker, **chosen)  # the tracker checks its ranges (one clear line) now, not per video
-            except UsageError:
-                raise
-            except (TypeError, ValueError, OverflowError) as exc:  # a tracker that does not say it in lptrack's terms
-                raise UsageError(f"{tracker}: {exc}") from None
+            create_tracker(tracker, **chosen)  # the tracker checks its ranges (one clear line) now, not per video
     return params

@@ -20,6 +20,7 @@ import math
 import cv2
 import numpy as np
 
+from ..errors import UsageError
 from ..geometry import Ellipse
 from ..logpolar import parabola_peak_2d
 from .base import MAX_WINDOW, Similarity, SimilarityTracker, check_ranges, register
@@ -54,6 +55,13 @@ class SpatialTracker(SimilarityTracker):
         check_ranges(self, {"window": (3, MAX_WINDOW), "n_scales": (1, 31), "n_angles": (1, 31),
                             "scale_step": (0.0, 0.5), "angle_step_deg": (0.0, 45.0), "lost_threshold": (0.0, 1.0)},
                      positive={"scale_step", "angle_step_deg"}, odd={"window", "n_scales", "n_angles"})
+        # The grid's far corners: templates scaled beyond half to double size, or turned past a half turn, are
+        # no longer a local search (and a 31-scale grid of 50 % steps made templates 438 times the ROI).
+        span = (1 + self.scale_step) ** (self.n_scales // 2)
+        if span > 2.0 or self.angle_step_deg * (self.n_angles // 2) > 180.0:
+            raise UsageError(f"{self.name}: the grid must span at most half to double size and a half turn either "
+                             f"way; (1 + scale_step)^(n_scales // 2) is {span:.3g} and angle_step_deg x "
+                             f"(n_angles // 2) is {self.angle_step_deg * (self.n_angles // 2):g}")
         self.log_scale_step = math.log1p(self.scale_step)
 
     def _start(self, gray: np.ndarray, roi: Ellipse) -> None:

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..geometry import Ellipse
 from ..logpolar import LogPolarGrid, PhaseCorrelator, Peak, find_peaks, parabola_peak_2d
-from .base import MAX_WINDOW, Similarity, SimilarityTracker, check_ranges, register
+from .base import MAX_WINDOW, Similarity, SimilarityTracker, check_ranges, check_sampling_size, register
 
 
 class LogPolarMatcher:
@@ -117,6 +117,8 @@ class _WindowSearch(SimilarityTracker):
         self.n_rho, self.n_theta = int(n_rho), int(n_theta)
         check_ranges(self, {"window": (3, MAX_WINDOW), "n_rho": (8, 512), "n_theta": (16, 1024),
                             "lost_threshold": (0.0, 1.0)}, odd={"window"})
+        check_sampling_size(self, self.window ** 2 * self.n_rho * self.n_theta,
+                            f"window^2 x n_rho x n_theta ({self.window}^2 x {self.n_rho} x {self.n_theta})")
         self.offsets = window_offsets(self.window)
         self.coarse = bool(coarse)
 

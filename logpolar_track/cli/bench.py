@@ -186,7 +186,7 @@ def _speed(trackers: str | None, json_out: str | None, quiet: bool) -> None:
 
 
 def _runnable_trackers(spec: str | None) -> tuple[list[str], list[tuple[str, str]]]:
-    """The requested trackers that can run here, and (name, reason) for those skipped (see :func:`_note`)."""
+    """The requested trackers that can run here, and (name, reason) for those skipped (see :func:`_note_skipped`)."""
     names, skipped = resolve_trackers(spec)
     if not names:
         reasons = "; ".join(f"{name}: {reason}" for name, reason in skipped)

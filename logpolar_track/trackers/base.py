@@ -190,19 +190,6 @@ def _finite(sim: Similarity) -> bool:
 #: already take seconds a frame, and much larger ones exhaust memory.
 MAX_WINDOW = 101
 
-#: Most samples a thesis tracker's search may take from one frame (window centres x log-polar samples): the
-#: defaults take about 1 million (121 x 64 x 128), and sampling maps of this many float32 take 256 MB each.
-MAX_SEARCH_SAMPLES = 1 << 26
-
-
-def check_sampling_size(tracker, samples: float, what: str) -> None:
-    """Raise :class:`UsageError` if ``samples`` (what one frame's search samples, from ``tracker``'s parameters
-    together) exceeds :data:`MAX_SEARCH_SAMPLES`: each parameter in range can still combine into gigabytes."""
-    if samples > MAX_SEARCH_SAMPLES:
-        raise UsageError(f"{tracker.name}: {what} come to {samples:,.0f} samples a frame, more than the "
-                         f"{MAX_SEARCH_SAMPLES:,} allowed (256 MB a float32 sampling map); choose smaller ones")
-
-
 def check_ranges(tracker, ranges: dict[str, tuple[float, float | None]], *, positive=frozenset(),
                  odd=frozenset()) -> None:
     """Raise :class:`UsageError` naming the first of ``tracker``'s parameters (attributes) outside its ``(low,

@@ -24,7 +24,8 @@ import numpy as np
 
 from ..geometry import Ellipse
 from ..logpolar import LogPolarGrid, PhaseCorrelator, Peak, find_peaks, parabola_peak_2d
-from .base import MAX_WINDOW, Similarity, SimilarityTracker, check_ranges, check_sampling_size, register
+from ..errors import UsageError
+from .base import MAX_WINDOW, Similarity, SimilarityTracker, check_ranges, register
 
 
 class LogPolarMatcher:
@@ -56,6 +57,11 @@ class LogPolarMatcher:
         """(scale factor, rotation in degrees CCW) that peak ``index`` stands for."""
         return (math.exp(float(peak.d_rho[index]) * self.grid.log_step),
                 float(peak.d_theta[index]) * self.grid.degrees_per_bin)
+
+
+#: Most samples the search may take from one frame (window centres x log-polar samples): the defaults take about
+#: 1 million (121 x 64 x 128), and sampling maps of this many float32 take 256 MB each.
+MAX_SEARCH_SAMPLES = 1 << 26
 
 
 def window_offsets(window: int) -> np.ndarray:
@@ -117,8 +123,12 @@ class _WindowSearch(SimilarityTracker):
         self.n_rho, self.n_theta = int(n_rho), int(n_theta)
         check_ranges(self, {"window": (3, MAX_WINDOW), "n_rho": (8, 512), "n_theta": (16, 1024),
                             "lost_threshold": (0.0, 1.0)}, odd={"window"})
-        check_sampling_size(self, self.window ** 2 * self.n_rho * self.n_theta,
-                            f"window^2 x n_rho x n_theta ({self.window}^2 x {self.n_rho} x {self.n_theta})")
+        # Each parameter in range can still combine into gigabytes of sampling maps.
+        samples = self.window ** 2 * self.n_rho * self.n_theta
+        if samples > MAX_SEARCH_SAMPLES:
+            raise UsageError(f"{self.name}: window^2 x n_rho x n_theta ({self.window}^2 x {self.n_rho} x "
+                             f"{self.n_theta}) come to {samples:,} samples a frame, more than the "
+                             f"{MAX_SEARCH_SAMPLES:,} allowed (256 MB a float32 sampling map); choose smaller ones")
         self.offsets = window_offsets(self.window)
         self.coarse = bool(coarse)
 

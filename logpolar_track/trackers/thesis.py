@@ -22,9 +22,9 @@ import math
 
 import numpy as np
 
+from ..errors import UsageError
 from ..geometry import Ellipse
 from ..logpolar import LogPolarGrid, PhaseCorrelator, Peak, find_peaks, parabola_peak_2d
-from ..errors import UsageError
 from .base import MAX_WINDOW, Similarity, SimilarityTracker, check_ranges, register
 
 

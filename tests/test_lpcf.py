@@ -512,7 +512,10 @@ def test_prediction_gives_way_under_camera_jitter():
     for seed in range(4):
         rng = np.random.default_rng(seed)
         background = random_texture(height + 54, width + 54, rng)
-        texture = cv2.addWeighted(random_texture(99, 99, rng), 0.8, 0, 0, 40)
+        # An array, not a scalar, as addWeighted's second input: OpenCV 5.1 cannot convert the scalar 0 to a
+        # 3-channel uint8 image (getConvertFunc assertion).
+        texture = random_texture(99, 99, rng)
+        texture = cv2.addWeighted(texture, 0.8, np.full_like(texture, 40), 1.0, 0)
         roi = Ellipse.circle(320, 240, radius)
         x, y, heading = 320.0, 240.0, rng.uniform(0, 2 * math.pi)
         poses, frames = [], []

@@ -97,7 +97,9 @@ class VideoReader:
         Index of the first frame to deliver (0 = first frame of the file). Earlier frames are decoded and
         dropped, which is exact where container seeking is not.
     read_ahead : int, optional
-        How many decoded frames may wait in the queue (memory is bounded to about this many frames).
+        How many frames the background thread may decode ahead of the one the caller holds, the one being
+        decoded included: at most ``1 + read_ahead`` frames are alive at once (25 MB each at 4K). With 1, the
+        next frame is decoded while the caller works on the current one.
 
     Attributes
     ----------
@@ -157,7 +159,10 @@ class VideoReader:
             raise _past_the_end(self.start_frame, self.path, self.start_frame)
         self.first_frame: np.ndarray = first
         self.height, self.width = first.shape[:2]
-        self._queue: queue.Queue = queue.Queue(maxsize=self._read_ahead)
+        # The slots bound the frames decoded ahead, counted from the start of their decoding: a bounded queue
+        # alone let the thread decode one more frame while the queue was full (two frames ahead, 25 MB more at 4K).
+        self._slots = threading.Semaphore(self._read_ahead)
+        self._queue: queue.Queue = queue.Queue()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._iterated = False
@@ -191,6 +196,7 @@ class VideoReader:
         index = self.start_frame
         first, self.first_frame = self.first_frame, None  # do not keep a frame alive for the whole run
         yield index, self.time_of(index), first
+        del first  # nor here, where the generator would hold it to the end
         if self._closed:
             return
         self._thread = threading.Thread(target=self._decode, name=f"lptrack-read-{self.path.name}",
@@ -198,6 +204,7 @@ class VideoReader:
         self._thread.start()
         while True:
             item = self._queue.get()
+            self._slots.release()
             if item is _END:
                 return
             if isinstance(item, BaseException):
@@ -211,26 +218,27 @@ class VideoReader:
         Once started, the thread owns the capture and releases it as it ends, so that a :meth:`close` whose
         wait is interrupted (Ctrl-C) can neither release it mid-read nor leave it open."""
         try:
-            while not self._stop.is_set():
+            while self._free_slot():
                 ok, frame = self._cap.read()  # releases the GIL while FFmpeg decodes
                 if not ok or frame is None:
                     break
-                if not self._put(frame):
-                    return
+                self._queue.put(frame)
+                del frame  # the queue holds it; the consumer's taking it frees the slot
+            else:  # stopped by close(): nobody waits for the end
+                return
         except Exception as exc:  # noqa: BLE001 - handed to the consumer, which raises it as a VideoError
-            self._put(exc)
+            self._queue.put(exc)
             return
         finally:
             self._cap.release()
-        self._put(_END)
+        self._queue.put(_END)
 
-    def _put(self, item) -> bool:
+    def _free_slot(self) -> bool:
+        """Wait until a frame may be decoded ahead (see ``read_ahead``); False once :meth:`close` stops the
+        thread."""
         while not self._stop.is_set():
-            try:
-                self._queue.put(item, timeout=0.05)
+            if self._slots.acquire(timeout=0.05):
                 return True
-            except queue.Full:
-                continue
         return False
 
     def close(self) -> None:

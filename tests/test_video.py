@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import gc
 import signal
 import threading
 import time
+import weakref
 
 import cv2
 import numpy as np
@@ -90,6 +92,38 @@ def test_close_interrupted_while_waiting_still_releases_the_file(tiny_video, mon
     thread.join(timeout=10)
     assert not thread.is_alive()
     assert not reader._cap.isOpened()
+
+
+@pytest.mark.parametrize("read_ahead", [1, 2])
+def test_reader_decodes_at_most_read_ahead_frames_ahead_and_keeps_none(tiny_video, read_ahead):
+    """Memory is bounded by the frames alive at once (25 MB each at 4K): the one the caller holds and at most
+    ``read_ahead`` decoded or being decoded; the reader keeps no frame before the current one (the first frame
+    included)."""
+    reader = VideoReader(tiny_video.path, read_ahead=read_ahead)
+    decoded = []  # frames decoded by the background thread
+    capture = reader._cap
+
+    class CountingCapture:
+        def read(self):
+            ok, frame = capture.read()
+            decoded.append(ok)
+            return ok, frame
+
+        def release(self):
+            capture.release()
+
+    reader._cap = CountingCapture()
+    seen = []
+    with reader:
+        for index, _, frame in reader:
+            seen.append(weakref.ref(frame))
+            del frame
+            time.sleep(0.05)  # time for the thread to decode as far ahead as it may
+            if index < 8:
+                assert len(decoded) <= index + read_ahead  # frame 0 was decoded when the reader opened
+            gc.collect()
+            assert sum(ref() is not None for ref in seen[:-1]) == 0  # none before the current one
+    assert len(seen) == tiny_video.n_frames
 
 
 def test_reader_iterates_once(tiny_video):

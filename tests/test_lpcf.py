@@ -118,6 +118,26 @@ def test_packed_spectra_match_numpy_fft():
         assert np.allclose(got, expected, atol=1e-4 * np.abs(expected).max())
 
 
+@pytest.mark.parametrize("filter_shape, map_shape", [((64, 64), (135, 200)), ((40, 64), (240, 320)),
+                                                      ((64, 22), (60, 80)), ((50, 64), (7, 9))])
+def test_the_whole_frame_search_correlates_as_filter2d(filter_shape, map_shape):
+    """The search's summed correlation, made in the Fourier domain, equals the channels' ``cv2.filter2D``
+    correlations (anchored, zero beyond the map) summed, up to float32 rounding -- also for a map smaller than
+    the kernels."""
+    from logpolar_track.trackers.lpcf import _CoarseFilter, _PackedSpectra
+
+    rng = np.random.default_rng(5)
+    filter_images = rng.standard_normal((7,) + filter_shape).astype(np.float32)
+    coarse = _CoarseFilter(_PackedSpectra(*filter_shape).forward(filter_images))
+    maps = rng.standard_normal((7,) + map_shape).astype(np.float32)
+    expected = sum(cv2.filter2D(m, cv2.CV_32F, k, anchor=coarse.anchor, borderType=cv2.BORDER_CONSTANT)
+                   for m, k in zip(maps, coarse.kernels))
+    for _ in range(2):  # the second time with the kernels' spectra kept
+        got = coarse.response(maps)
+        assert got.shape == map_shape
+        assert np.abs(got - expected).max() <= 1e-5 * np.abs(expected).max()
+
+
 def test_packed_phase_correlation_matches_phase_correlator():
     """The tracker's packed log-polar correlation gives PhaseCorrelator's surface up to float32 rounding."""
     from logpolar_track.logpolar import PhaseCorrelator

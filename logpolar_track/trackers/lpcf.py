@@ -264,8 +264,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         frame (its response's peak on the frame's last patch; 0.04-0.05 ms): where it answers below
         ``_LONG_TERM_WEAK`` the object is taken to be no longer at the estimate, and the frame is not learnt
         (neither the filter, the log-polar model, the appearance subspace, the colour histograms nor the scale
-        filter), and after ``_LONG_TERM_AFTER`` such frames in a row, every ``_SEARCH_EVERY`` frames, the frame is
-        searched with the long-term filter (:meth:`_long_term_search`), whether the short-term match dropped or
+        filter), and after ``_LONG_TERM_AFTER`` such frames in a row, every ``_SEARCH_EVERY`` frames at first and
+        less often while the searches find nothing (``_LONG_TERM_BACKOFF``), the frame is searched with the
+        long-term filter (:meth:`_long_term_search`), whether the short-term match dropped or
         only weakened slowly (the whole-frame search of ``redetect_after`` waits for a sudden drop, which a slowly
         decaying match never makes: freeman1's face turning away, the estimate sliding onto the shirt and the
         background and locking onto a look-alike, learnt). Ma et al.'s LCT (CVPR 2015) in the long-term filter
@@ -273,10 +274,12 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         without it, the 7 real sequences' mean IoU AUC over OTB's 13 SRE starts 0.459 -> 0.481 (freeman1 0.250 ->
         0.381, better from 12 of its 13 starts; human3 0.384 -> 0.412; toy 0.621 -> 0.616, one start 0.08 lower;
         the other four within 0.001), from the box 0.563 -> 0.598 (freeman1 0.284 -> 0.510, human3 0.596 ->
-        0.617); sample_videos unchanged (0.951). It costs 0.04-0.05 ms a frame where the object is recognised,
-        and the searches while it is not: on one loaded core of this machine (best of 3 runs) the real sequences'
-        mean 1.82 -> 2.09 ms a frame, freeman1 1.61 -> 2.97, motorrolling (off its object most of the time from
-        every start, never moved) 2.35 -> 3.42. Variants, over the 13 starts, against 0.483 for the prototype this
+        0.617); sample_videos unchanged (0.951). It costs 0.04-0.1 ms a frame where the object is recognised,
+        and the searches while it is not: with the searches' backoff, on one core of a quiet machine (best of 3
+        runs, 2026-12-02), the real sequences' mean 1.47 -> 1.80 ms a frame (679 -> 556 frames/s), freeman1 1.36
+        -> 2.45, motorrolling (off its object most of the time from every start, never moved) 1.80 -> 2.31, the
+        others 0.03-0.14 ms more (searching every third frame throughout: 1.52 -> 2.02, freeman1 2.86,
+        motorrolling 3.18). Variants, over the 13 starts, against 0.483 for the prototype this
         was written from (which counted a move as one frame's motion; freeman1 0.395): searching at the
         estimate's size alone 0.473; not while the short-term search runs 0.478; resetting the short-term filter
         and log-polar model to the first frame's after a move 0.480; the first place, once left, added to the
@@ -441,10 +444,13 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.numerator = self.label_conj * spec
         self.denominator = self.spectra.power(spec)
         self._filter()
-        #: The long-term model (see ``long_term``): the first frame's filter, its spectra and ready to correlate.
-        self._long_term_spectra = self._filter_spectra() if self.long_term else None
+        #: The long-term model (see ``long_term``): the first frame's filter, ready to correlate with patches and, for
+        #: its whole-frame search, with the frame.
         self._long_term_parts = self._filter_parts
+        self._long_term_coarse = _CoarseFilter(self._filter_spectra()) if self.long_term else None
         self._long_term_weak = 0  # frames in a row the long-term filter has not recognised the estimate
+        self._long_term_due = _LONG_TERM_AFTER  # the count of such frames at which the next search is made
+        self._long_term_gap = 0  # frames between the last two searches of the count (0: none yet)
         #: The size reported (relative to the ROI's), where it is the scale filter's (see ``scale_filter``).
         self.shown_scale = self._shown_own_scale = 1.0  # and the tracker's own scale when it was last reported
         self._scale_filter = self._scale_sample = None
@@ -534,10 +540,14 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         if self.misses >= self.redetect_after:
             moved, psr, peak = self._redetect(frame, predicted, moved, psr, peak)
         recognised_elsewhere = False  # found by the long-term search
-        if (self._long_term_spectra is not None and moved is here and self._long_term_weak >= _LONG_TERM_AFTER
-                and (self._long_term_weak - _LONG_TERM_AFTER) % _SEARCH_EVERY == 0):
+        if (self._long_term_coarse is not None and moved is here
+                and self._long_term_weak >= self._long_term_due):
             moved, psr, peak = self._long_term_search(frame, moved, psr, peak)
             recognised_elsewhere = moved is not here
+            # Searches that find nothing come further apart (see _LONG_TERM_BACKOFF).
+            self._long_term_gap = (_SEARCH_EVERY if self._long_term_gap == 0
+                                   else min(round(self._long_term_gap * _LONG_TERM_BACKOFF), _LONG_TERM_MAX_GAP))
+            self._long_term_due = self._long_term_weak + self._long_term_gap
         found_elsewhere = moved is not here
         # Iterate to agreement: each scale/rotation estimate is made at a better centre, and the residual
         # change shrinks, which matters because windowed phase correlation under-reads large shifts.
@@ -606,12 +616,14 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         match = min(math.sqrt(max(peak, 0.0) * max(lp_height, 0.0)), 1.0)
         self._last_psr = psr
         long_term_peak = None
-        if self._long_term_spectra is not None:
+        if self._long_term_coarse is not None:
             # The long-term check, on the patch last correlated (where the estimate was found, to a fraction of a
             # sample): the first frame's filter's peak over it.
-            long_term_peak = _peak_and_psr(self.spectra.correlate(self._long_term_parts, self._last_sample[2]))[2]
+            long_term_peak = float(self.spectra.correlate(self._long_term_parts, self._last_sample[2]).max())
             recognised = long_term_peak >= _LONG_TERM_WEAK
             self._long_term_weak = 0 if recognised or recognised_elsewhere else self._long_term_weak + 1
+            if self._long_term_weak == 0:
+                self._long_term_due, self._long_term_gap = _LONG_TERM_AFTER, 0
         self.diagnostics = {"psr": psr, "peak": peak, "lp_height": lp_height, "match": match,
                             "level": self.match_level, "appearance_distance": distance,
                             "long_term_peak": long_term_peak}
@@ -807,7 +819,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self._search_part = part  # every size searches the same part of the frame
             pose = Similarity(cursor.cx, cursor.cy, cursor.scale * size, cursor.rotation_deg, cursor.score)
             margin = _LONG_TERM_EDGE * min(self.roi.a, self.roi.b) * pose.scale
-            for cx, cy in self._frame_candidates(frame, pose, _SEARCH_CANDIDATES, self._long_term_spectra):
+            for cx, cy in self._frame_candidates(frame, pose, _SEARCH_CANDIDATES, long_term=True):
                 place = Similarity(float(cx), float(cy), pose.scale, pose.rotation_deg, pose.score)
                 _, spectrum = self._features_and_spectrum(frame, place)
                 dy, dx, _, place_psr = _peak_and_psr(self.spectra.correlate(self._long_term_parts, spectrum))
@@ -822,16 +834,17 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             return best, psr, peak
         return self._translate(frame, found)
 
-    def _frame_candidates(self, frame, pose: Similarity, count: int, spectra: np.ndarray | None = None) -> np.ndarray:
+    def _frame_candidates(self, frame, pose: Similarity, count: int, long_term: bool = False) -> np.ndarray:
         """Centres (pixels, ``(n, 2)``, strongest first, n <= ``count``) of the strongest local maxima of the
-        filter's response over the frame, with the filter at ``pose``'s scale and angle (the filter of packed
-        ``spectra`` ``(C, h, w)`` if given, else the tracker's own).
+        filter's response over the frame, with the filter (the long-term one if ``long_term``, else the tracker's
+        own) at ``pose``'s scale and angle.
 
         The frame is sampled like a patch (turned, anti-aliased) but over all of it and at half the filter's
-        density, and correlated with the filter reduced alike (:meth:`_coarse_filter`): a coarse map, good to a
+        density, and correlated with the filter reduced alike (:class:`_CoarseFilter`): a coarse map, good to a
         sample of the filter or so, of where the object may be. A map wider or taller than ``_SEARCH_PART``
         samples (a small object in a large frame) is searched one overlapping part per call, nearest to
-        ``pose`` first. (640 x 480, object radius 25 px: 8 ms on one core; a part of a 4K frame 30-60 ms.
+        ``pose`` first. (640 x 480, object radius 25 px: 8 ms on one core when the correlation was made channel by
+        channel with ``cv2.filter2D``, two to three times less since; a part of a 4K frame 30-60 ms then.
         Sweeping the frame with patches of the filter's size, two a frame at 0.25 ms each, found 14 of 24
         objects coming back into view, against 24 now.)
         """
@@ -841,9 +854,14 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         spacing = 2 * self.step * pose.scale  # pixels between samples of the map
         nx = _even((width * abs(cos_t) + height * abs(sin_t)) / spacing + 2)
         ny = _even((width * abs(sin_t) + height * abs(cos_t)) / spacing + 2)
-        kernels, anchor = self._coarse_filter(spectra)
+        if long_term:
+            coarse = self._long_term_coarse
+        else:
+            if self._coarse is None:  # made once per filter (see _filter), whatever the parts and searches
+                self._coarse = _CoarseFilter(self._filter_spectra())
+            coarse = self._coarse
         # Parts overlap by a kernel, so that an object on a part's edge is whole in the next one.
-        kernel_h, kernel_w = kernels[0].shape
+        kernel_h, kernel_w = coarse.shape
         side = max(_SEARCH_PART, 2 * max(kernel_h, kernel_w))
         x_starts, part_w = _part_starts(nx, side, kernel_w)
         y_starts, part_h = _part_starts(ny, side, kernel_h)
@@ -871,33 +889,13 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             features = patch_features(self._patch(frame, centre, (part_w, part_h), cv2.BORDER_REFLECT_101))
         finally:
             self._blur_scale, self._blur_cache = blur_scale, None
-        response = np.zeros((part_h, part_w), np.float32)
-        for channel, kernel in zip(features, kernels):
-            response += cv2.filter2D(channel, cv2.CV_32F, kernel, anchor=anchor, borderType=cv2.BORDER_CONSTANT)
+        response = coarse.response(features)
         rows, cols = np.nonzero(response == cv2.dilate(response, np.ones((5, 5), np.uint8)))
         strongest = np.argsort(-response[rows, cols], kind="stable")
         p, q = cols[strongest] - part_w / 2.0, rows[strongest] - part_h / 2.0
         xs, ys = centre.cx + c * p + s * q, centre.cy - s * p + c * q
         inside = (xs >= 0) & (xs <= width - 1) & (ys >= 0) & (ys <= height - 1)
         return np.stack([xs[inside], ys[inside]], axis=1)[:count]
-
-    def _coarse_filter(self, spectra: np.ndarray | None = None) -> tuple[list[np.ndarray], tuple[int, int]]:
-        """The filter (of packed ``spectra`` if given, else the tracker's own) as ``cv2.filter2D`` kernels, one
-        per feature channel, for samples twice as far apart as the filter's own, and their anchor ``(x, y)``:
-        with both, a response's peak falls on the object's sample."""
-        if spectra is None:
-            spectra = self._filter_spectra()
-        ny, nx = spectra.shape[1:]
-        # Even offsets from the patch's centre (nx/2, ny/2) survive the halving, so the anchor is a sample.
-        y0, x0 = (ny // 2) % 2, (nx // 2) % 2
-        halve = np.array([0.25, 0.5, 0.25], np.float32)
-        kernels = []
-        for spectrum in spectra:
-            # The filter convolves circularly; filter2D correlates: the kernel is h(-k mod n).
-            kernel = np.roll(cv2.flip(cv2.idft(spectrum, flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE), -1), 1, (0, 1))
-            kernel = cv2.sepFilter2D(kernel, -1, halve, halve, borderType=cv2.BORDER_CONSTANT)
-            kernels.append(np.ascontiguousarray(kernel[y0::2, x0::2]))
-        return kernels, ((nx // 2 - x0) // 2, (ny // 2 - y0) // 2)
 
     def _scale_rotate(self, frame, state: Similarity) -> tuple[Similarity, float]:
         """Change of scale and angle from the log-polar match at ``state``'s centre, and the match height.
@@ -1090,8 +1088,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self.lp_mask = cv2.resize(visibility, (self.n_theta, self.n_rho), interpolation=cv2.INTER_LINEAR)
 
     def _filter(self) -> None:
-        """The filter (:meth:`_filter_spectra`), ready for :meth:`_PackedSpectra.correlate`."""
+        """The filter (:meth:`_filter_spectra`), ready for :meth:`_PackedSpectra.correlate`; its whole-frame
+        search form is made again when next needed."""
         self._filter_parts = self.spectra.multiplier(self._filter_spectra())
+        self._coarse = None
 
     def _filter_spectra(self) -> np.ndarray:
         """The filter's packed spectra ``(C, h, w)``: ``numerator / (denominator + regularisation)``."""
@@ -1493,6 +1493,57 @@ class _PackedPhaseCorrelator:
         return cv2.idft(cross, flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE)
 
 
+class _CoarseFilter:
+    """A correlation filter for the whole-frame search: for samples twice as far apart as the filter's own, as
+    one correlation kernel per feature channel and their anchor ``(x, y)``, with which a response's peak falls on
+    the object's sample; and the summed correlation of a multi-channel map with them.
+
+    The sum is made in the Fourier domain, the kernels' spectra kept per padded map size: a search of ``C``
+    channels costs ``C`` forward DFTs and one inverse. Equal, within float32 rounding (3e-7 of the response's
+    range), to the sum of ``cv2.filter2D(channel, CV_32F, kernel, anchor, BORDER_CONSTANT)`` over the channels,
+    which took two to three times as long (7 channels, kernels of 17 to 40 samples, maps of 60 x 80 to 512 x 512).
+    """
+
+    def __init__(self, spectra: np.ndarray):
+        """``spectra``: the filter's packed spectra ``(C, h, w)`` (see :class:`_PackedSpectra`)."""
+        ny, nx = spectra.shape[1:]
+        # Even offsets from the patch's centre (nx/2, ny/2) survive the halving, so the anchor is a sample.
+        y0, x0 = (ny // 2) % 2, (nx // 2) % 2
+        halve = np.array([0.25, 0.5, 0.25], np.float32)
+        self.kernels = []
+        for spectrum in spectra:
+            # The filter convolves circularly; a correlation kernel is h(-k mod n).
+            kernel = np.roll(cv2.flip(cv2.idft(spectrum, flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE), -1), 1, (0, 1))
+            kernel = cv2.sepFilter2D(kernel, -1, halve, halve, borderType=cv2.BORDER_CONSTANT)
+            self.kernels.append(np.ascontiguousarray(kernel[y0::2, x0::2]))
+        self.anchor = ((nx // 2 - x0) // 2, (ny // 2 - y0) // 2)
+        self.shape = self.kernels[0].shape  # (rows, columns) of each kernel
+        self._kernel_spectra: dict[tuple[int, int], list[np.ndarray]] = {}
+
+    def response(self, maps: np.ndarray) -> np.ndarray:
+        """``sum_c`` of the correlation of ``maps[c]`` (``(C, H, W)`` float32) with kernel ``c``, zero beyond the
+        maps' edges: ``(H, W)`` float32, as ``cv2.filter2D`` with :attr:`anchor` and ``BORDER_CONSTANT``."""
+        height, width = maps.shape[1:]
+        kernel_h, kernel_w = self.shape
+        # Padded so that the circular correlation never wraps a map's far edge onto its near one.
+        size = cv2.getOptimalDFTSize(height + kernel_h - 1), cv2.getOptimalDFTSize(width + kernel_w - 1)
+        kernel_spectra = self._kernel_spectra.get(size)
+        if kernel_spectra is None:
+            kernel_spectra = self._kernel_spectra[size] = [
+                cv2.dft(cv2.copyMakeBorder(kernel, 0, size[0] - kernel_h, 0, size[1] - kernel_w, cv2.BORDER_CONSTANT))
+                for kernel in self.kernels]
+        padded = np.zeros(size, np.float32)
+        total = None
+        for image, kernel_spectrum in zip(maps, kernel_spectra):
+            padded[:height, :width] = image
+            product = cv2.mulSpectrums(cv2.dft(padded), kernel_spectrum, 0, conjB=True)
+            total = product if total is None else cv2.add(total, product, dst=total)
+        full = cv2.idft(total, flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE)
+        # The circular correlation c[n] = sum_m k[m] s[n + m]; the anchored one at (x, y) is c[x - ax, y - ay].
+        anchor_x, anchor_y = self.anchor
+        return np.roll(full, (anchor_y, anchor_x), (0, 1))[:height, :width]
+
+
 #: Gradient refinement (see ``_refine``): the appearance patch covers the ROI's ellipse enlarged this much, and
 #: the refinement may move the estimate at most this far from the log-polar/filter estimate.
 _REFINE_EXTENT = 1.0
@@ -1582,6 +1633,12 @@ _FILTER_MARGIN = 0.95
 #: started. Frames in a row before the search: 3 / 5 / 10 -> 0.457 / 0.4744 / 0.465 (prototype, learning
 #: regardless).
 _LONG_TERM_WEAK, _LONG_TERM_AFTER = 0.2, 5
+#: Each long-term search that moves nothing puts the next one this many times further off (the first gap is
+#: ``_SEARCH_EVERY`` frames), up to ``_LONG_TERM_MAX_GAP`` frames apart: a long stretch off the object (freeman1,
+#: motorrolling) is searched every 6 frames rather than every 3, and an object back in view after a long absence
+#: is found within 6 frames of it. Over the 13 starts 0.480 (every 3 frames: 0.481; up to 12 frames apart: 0.482,
+#: but a disc back after 20 frames away was then found too late in 1 of the 4 seeds of tests/test_lpcf.py).
+_LONG_TERM_BACKOFF, _LONG_TERM_MAX_GAP = 1.5, 6
 #: A place the long-term search finds is taken if the long-term filter's PSR there is this many times the one at
 #: the estimate (and at least ``psr_learn``). On the real sequences' searches (13 starts, searching wherever the
 #: peak was under 0.3 for 3 frames, without moving), places on the object with the estimate off it: median 14.6

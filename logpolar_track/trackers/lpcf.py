@@ -271,10 +271,11 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         decaying match never makes: freeman1's face turning away, the estimate sliding onto the shirt and the
         background and locking onto a look-alike, learnt). Ma et al.'s LCT (CVPR 2015) in the long-term filter
         and its re-detection, and TLD in not learning what the long-term model does not recognise. Against lpcf
-        without it, the 7 real sequences' mean IoU AUC over OTB's 13 SRE starts 0.459 -> 0.481 (freeman1 0.250 ->
-        0.381, better from 12 of its 13 starts; human3 0.384 -> 0.412; toy 0.621 -> 0.616, one start 0.08 lower;
-        the other four within 0.001), from the box 0.563 -> 0.598 (freeman1 0.284 -> 0.510, human3 0.596 ->
-        0.617); sample_videos unchanged (0.951). It costs 0.04-0.1 ms a frame where the object is recognised,
+        without it (OpenCV 5.1), the 7 real sequences' mean IoU AUC over OTB's 13 SRE starts 0.459 -> 0.480
+        (freeman1 0.250 -> 0.372; human3 0.384 -> 0.412; toy 0.621 -> 0.616, one start 0.08 lower; the other four
+        within 0.001), from the box 0.563 -> 0.568 (human3 0.596 -> 0.617, freeman1 0.284 -> 0.307: 0.46 with the
+        searches at most 4 frames apart, 0.510 with every third frame, whose 13-start mean is the same, 0.481);
+        sample_videos unchanged (0.951). It costs 0.04-0.1 ms a frame where the object is recognised,
         and the searches while it is not: with the searches' backoff, on one core of a quiet machine (best of 3
         runs, 2026-12-02), the real sequences' mean 1.47 -> 1.80 ms a frame (679 -> 556 frames/s), freeman1 1.36
         -> 2.45, motorrolling (off its object most of the time from every start, never moved) 1.80 -> 2.31, the

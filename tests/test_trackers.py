@@ -175,6 +175,27 @@ def test_coarse_to_fine_equals_exhaustive_reference(name):
         assert f.score == pytest.approx(r.score, abs=1e-4)
 
 
+def test_coarse_stage_finds_a_peak_the_checkerboard_skips():
+    """The coarse stage scores the checkerboard, then the skipped cells beside its best: a peak on a skipped
+    cell is found, with about half the cells scored."""
+    tracker = create_tracker("fixed")
+    n = tracker.window
+    peak = 2 * n + 7  # row 2, column 7: offsets (2, -3), dx + dy odd, not on the checkerboard
+    assert peak not in tracker.coarse_cells
+    rows, cols = np.divmod(np.arange(n * n), n)
+    surface = 1.0 / (1.0 + np.hypot(rows - 2, cols - 7))
+    scored = []
+
+    def score(cells):
+        scored.extend(int(c) for c in cells)
+        return surface[cells][None]
+
+    assert tracker._coarse_starts(score).tolist() == [peak]
+    assert len(scored) == len(set(scored)) < 0.6 * n * n
+    corner = tracker.cell_neighbours[0].tolist()
+    assert sorted(corner) == [-1, -1, 1, n]
+
+
 @pytest.mark.parametrize("name", ACCURATE + ["spatial"])
 def test_frames_are_not_modified(name):
     roi, _, frames = sequence("circle", 0.3, scale_range=(0.9, 1.1), n=3, radius_px=5.0)

@@ -281,6 +281,11 @@ def test_update_refuses_what_it_cannot_track(name, frame, fragment):
 def test_opencv_trackers_report_the_roi_moved_and_scaled(name):
     """OpenCV's box trackers report the ROI's own ellipse (its semi-axes times ``scale``, its angle kept), moved
     with their box: the first state is the ROI exactly, as the run CSV's init row must be."""
+    # MIL draws random training samples: init() seeds them, but what it makes of them differs between machines
+    # (CI once saw 3.6 px with the seed that gives 1.0 px here). Over seeds 0-199 its worst centre error on this
+    # sequence was 0.5-4.3 px, so it gets a wider bound than the deterministic trackers; a box left behind would
+    # be 15 px off by the last frame.
+    tolerance_px = 5.0 if name == "cv-mil" else 3.0
     roi = Ellipse(160, 110, 40, 26, 30)
     poses = [Pose(160 + k, 110 + 0.5 * k, 1.0, 0.0) for k in range(15)]
     frames = list(synthetic_sequence(poses, roi, size=(320, 240), seed=4))
@@ -291,7 +296,7 @@ def test_opencv_trackers_report_the_roi_moved_and_scaled(name):
         e = state.ellipse
         assert state.rotation_deg is None and e.angle_deg == roi.angle_deg
         assert (e.a, e.b) == pytest.approx((roi.a * state.scale, roi.b * state.scale))
-        assert math.hypot(e.cx - pose.cx, e.cy - pose.cy) <= 3.0
+        assert math.hypot(e.cx - pose.cx, e.cy - pose.cy) <= tolerance_px
 
 
 def test_tracker_parameters_are_the_keywords_a_tracker_takes_with_defaults():

@@ -552,12 +552,15 @@ def long_footage(tmp_path_factory) -> Path:
 
 def _start_and_wait_for_a_temporary_file(long_footage, out: Path, *extra: str):
     """Start a 2-job batch with video output; return (process, pid of the worker writing the first temp file)."""
-    # A shell's background job inherits SIGINT ignored, and Python keeps it so: restore the default, or Ctrl-C
-    # would not reach the batch when the tests themselves run in the background (done in the child's Python,
-    # since preexec_fn is unsafe in a parent with threads).
-    restore_sigint = ("import runpy, signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+    # A shell's background job inherits SIGINT ignored, and `nohup` SIGHUP, and Python keeps them so (lptrack
+    # then leaves them ignored, as it should): restore the defaults, or the signals would not reach the batch when
+    # the tests themselves run in the background or under nohup (done in the child's Python, since preexec_fn is
+    # unsafe in a parent with threads).
+    restore_signals = ("import runpy, signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+                      "[signal.signal(getattr(signal, s), signal.SIG_DFL) for s in ('SIGTERM', 'SIGHUP') "
+                      "if hasattr(signal, s)]; "
                       "sys.argv[0] = 'lptrack'; runpy.run_module('logpolar_track', run_name='__main__')")
-    process = subprocess.Popen([sys.executable, "-c", restore_sigint, "run", str(long_footage), "--out-dir",
+    process = subprocess.Popen([sys.executable, "-c", restore_signals, "run", str(long_footage), "--out-dir",
                                 str(out), "--jobs", "2", "--tracker", "spatial", *extra],
                                stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 60

@@ -557,9 +557,9 @@ def _start_and_wait_for_a_temporary_file(long_footage, out: Path, *extra: str):
     # the tests themselves run in the background or under nohup (done in the child's Python, since preexec_fn is
     # unsafe in a parent with threads).
     restore_signals = ("import runpy, signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
-                      "[signal.signal(getattr(signal, s), signal.SIG_DFL) for s in ('SIGTERM', 'SIGHUP') "
-                      "if hasattr(signal, s)]; "
-                      "sys.argv[0] = 'lptrack'; runpy.run_module('logpolar_track', run_name='__main__')")
+                       "[signal.signal(getattr(signal, s), signal.SIG_DFL) for s in ('SIGTERM', 'SIGHUP') "
+                       "if hasattr(signal, s)]; "
+                       "sys.argv[0] = 'lptrack'; runpy.run_module('logpolar_track', run_name='__main__')")
     process = subprocess.Popen([sys.executable, "-c", restore_signals, "run", str(long_footage), "--out-dir",
                                 str(out), "--jobs", "2", "--tracker", "spatial", *extra],
                                stderr=subprocess.PIPE, text=True)

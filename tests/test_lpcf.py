@@ -138,6 +138,30 @@ def test_the_whole_frame_search_correlates_as_filter2d(filter_shape, map_shape):
         assert np.abs(got - expected).max() <= 1e-5 * np.abs(expected).max()
 
 
+def test_the_whole_frame_search_keeps_a_bounded_number_of_kernel_spectra():
+    """A search filter lives as long as the track (the long-term one) and a drifting scale gives every search a new
+    map size: the spectra kept per size stay bounded, most recently used kept, and a size dropped and met again
+    still correlates as ``cv2.filter2D``."""
+    from logpolar_track.trackers.lpcf import _KERNEL_SPECTRA_KEPT, _CoarseFilter, _PackedSpectra
+
+    rng = np.random.default_rng(6)
+    coarse = _CoarseFilter(_PackedSpectra(40, 64).forward(rng.standard_normal((7, 40, 64)).astype(np.float32)))
+    first = rng.standard_normal((7, 50, 70)).astype(np.float32)
+    expected = sum(cv2.filter2D(m, cv2.CV_32F, k, anchor=coarse.anchor, borderType=cv2.BORDER_CONSTANT)
+                   for m, k in zip(first, coarse.kernels))
+    coarse.response(first)
+    first_size = next(iter(coarse._kernel_spectra))
+    for step in range(3 * _KERNEL_SPECTRA_KEPT):
+        coarse.response(np.zeros((7, 50 + 6 * step, 70 + 6 * step), np.float32))
+        coarse.response(first)  # in use throughout: never the one dropped
+        assert len(coarse._kernel_spectra) <= _KERNEL_SPECTRA_KEPT
+        assert first_size in coarse._kernel_spectra
+    assert len(coarse._kernel_spectra) == _KERNEL_SPECTRA_KEPT
+    coarse.response(np.zeros((7, 50 + 6 * 1, 70 + 6 * 1), np.float32))  # dropped long ago: made again
+    got = coarse.response(first)
+    assert np.abs(got - expected).max() <= 1e-5 * np.abs(expected).max()
+
+
 def test_packed_phase_correlation_matches_phase_correlator():
     """The tracker's packed log-polar correlation gives PhaseCorrelator's surface up to float32 rounding."""
     from logpolar_track.logpolar import PhaseCorrelator

@@ -1528,11 +1528,14 @@ class _CoarseFilter:
         kernel_h, kernel_w = self.shape
         # Padded so that the circular correlation never wraps a map's far edge onto its near one.
         size = cv2.getOptimalDFTSize(height + kernel_h - 1), cv2.getOptimalDFTSize(width + kernel_w - 1)
-        kernel_spectra = self._kernel_spectra.get(size)
+        kernel_spectra = self._kernel_spectra.pop(size, None)
         if kernel_spectra is None:
-            kernel_spectra = self._kernel_spectra[size] = [
-                cv2.dft(cv2.copyMakeBorder(kernel, 0, size[0] - kernel_h, 0, size[1] - kernel_w, cv2.BORDER_CONSTANT))
-                for kernel in self.kernels]
+            kernel_spectra = [cv2.dft(cv2.copyMakeBorder(kernel, 0, size[0] - kernel_h, 0, size[1] - kernel_w,
+                                                         cv2.BORDER_CONSTANT))
+                              for kernel in self.kernels]
+            if len(self._kernel_spectra) >= _KERNEL_SPECTRA_KEPT:
+                del self._kernel_spectra[next(iter(self._kernel_spectra))]  # the least recently used
+        self._kernel_spectra[size] = kernel_spectra  # (re)inserted last: dicts keep insertion order
         padded = np.zeros(size, np.float32)
         total = None
         for image, kernel_spectrum in zip(maps, kernel_spectra):
@@ -1580,6 +1583,10 @@ _PREDICTION_RATE = 0.2
 #: per feature channel; reducing the map further instead missed a 20 px object there), and the
 #: ``_SEARCH_CANDIDATES`` strongest places are tried (1 or 2: the same figures).
 _SEARCH_EVERY, _SEARCH_PART, _SEARCH_CANDIDATES = 3, 512, 2
+#: Padded sizes whose kernel spectra a whole-frame search filter keeps, the least recently used dropped first. The
+#: long-term filter lives as long as the track, and a drifting scale gives each search new map sizes: kept without
+#: a bound, freeman1's 325 frames had left 32 sizes (56 MB) in it, and a part of a large frame takes about 10 MB.
+_KERNEL_SPECTRA_KEPT = 6
 #: A prediction further than this many samples from the last place is checked against the last place itself, and
 #: against the place as far behind it, when a confident track turns weak there (see ``_estimate``). A disc of radius
 #: 40 px bouncing off the frame's walls, 10 seeds, frames tracked: at 50 px a frame 100 % (93.2 % without the check,

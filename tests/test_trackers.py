@@ -115,6 +115,10 @@ def test_counter_clockwise_turn_on_screen_is_positive(name):
     assert state.rotation_deg == pytest.approx(angle, abs=1.0)
     assert state.scale == pytest.approx(1.03, abs=0.01)
     assert state.ellipse.angle_deg == pytest.approx(angle, abs=1.0)
+    # Plain Python floats reach the caller, not NumPy scalars (which print as np.float64(...) under NumPy 2).
+    e = state.ellipse
+    assert all(type(v) is float for v in (e.cx, e.cy, e.a, e.b, e.angle_deg, state.scale, state.rotation_deg,
+                                          state.score))
 
 
 @pytest.mark.parametrize("name", THESIS)

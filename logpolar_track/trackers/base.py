@@ -123,8 +123,10 @@ class SimilarityTracker(Tracker):
         return frame if self.gray_dtype is None else to_gray(frame, self.gray_dtype)
 
     def _state(self, sim: Similarity, score: float | None = None) -> TrackState:
-        ellipse = self.roi.moved(sim.cx, sim.cy, sim.scale, sim.rotation_deg)
-        return TrackState(ellipse, sim.scale, sim.rotation_deg, float(sim.score if score is None else score))
+        # Plain floats: estimates come out of NumPy arithmetic, whose scalars would otherwise reach the caller.
+        scale, rotation = float(sim.scale), float(sim.rotation_deg)
+        ellipse = self.roi.moved(float(sim.cx), float(sim.cy), scale, rotation)
+        return TrackState(ellipse, scale, rotation, float(sim.score if score is None else score))
 
     @abstractmethod
     def _start(self, gray: np.ndarray, roi: Ellipse) -> None:

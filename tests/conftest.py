@@ -58,6 +58,19 @@ def write_video(path: Path, frames, fps: float = 30.0, fourcc: str | None = None
     return path
 
 
+def decode_all(path: Path) -> list[np.ndarray]:
+    """Every frame of ``path``, read from the start with a plain ``cv2.VideoCapture`` (the reference for readers)."""
+    cap = cv2.VideoCapture(str(path))
+    frames = []
+    while True:
+        ok, frame = cap.read()
+        if not ok:
+            break
+        frames.append(frame)
+    cap.release()
+    return frames
+
+
 def count_frames(path: Path) -> tuple[int, tuple[int, int], float]:
     """Decode ``path`` completely: (frame count, (width, height), fps the container reports)."""
     cap = cv2.VideoCapture(str(path))

@@ -15,6 +15,7 @@ import cv2
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import decode_all
 
 from logpolar_track.cli import main
 from logpolar_track.errors import RoiError, UsageError
@@ -38,19 +39,6 @@ def one_error_line(result, code: int) -> str:
     return lines[0]
 
 
-def sequential_frames(path: Path) -> list[np.ndarray]:
-    """Every frame of ``path`` read from the start with a plain cv2.VideoCapture."""
-    cap = cv2.VideoCapture(str(path))
-    frames = []
-    while True:
-        ok, frame = cap.read()
-        if not ok:
-            break
-        frames.append(frame)
-    cap.release()
-    return frames
-
-
 def png_size(path: Path) -> tuple[int, int]:
     image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
     assert image is not None, f"{path} is not a readable PNG"
@@ -65,7 +53,7 @@ def angle_diff_mod180(a: float, b: float) -> float:
 
 @pytest.mark.parametrize("index", [0, 1, 7, 19])
 def test_read_frame_is_the_nth_sequentially_decoded_frame(tiny_video, index):
-    expected = sequential_frames(tiny_video.path)[index]
+    expected = decode_all(tiny_video.path)[index]
     frame = read_frame(tiny_video.path, index)
     assert frame.index == index and frame.time_s == pytest.approx(index / 30.0)
     assert np.array_equal(frame.image, expected)
@@ -74,7 +62,7 @@ def test_read_frame_is_the_nth_sequentially_decoded_frame(tiny_video, index):
 def test_read_frame_at_a_time_rounds_to_the_nearest_frame(tiny_video):
     frame = read_frame(tiny_video.path, time_s=0.49)  # 14.7 frames at 30 fps -> frame 15
     assert frame.index == 15
-    assert np.array_equal(frame.image, sequential_frames(tiny_video.path)[15])
+    assert np.array_equal(frame.image, decode_all(tiny_video.path)[15])
 
 
 def test_read_frame_at_a_time_on_the_last_frame_is_the_last_frame(tiny_video):
@@ -97,7 +85,7 @@ def test_frame_command_writes_the_exact_frame(tiny_video, tmp_path, monkeypatch)
     out = tmp_path / "tiny.frame12.png"  # default name, in the current folder
     assert result.stdout.strip() == str(Path("tiny.frame12.png"))
     image = cv2.imread(str(out))
-    expected = sequential_frames(tiny_video.path)[12]
+    expected = decode_all(tiny_video.path)[12]
     assert image.shape == expected.shape
     # Only the size caption in the bottom-right corner differs (PNG is lossless).
     assert np.array_equal(image[:96], expected[:96])

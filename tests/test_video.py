@@ -12,28 +12,16 @@ import cv2
 import numpy as np
 import pytest
 
-from conftest import count_frames, write_video
+from conftest import count_frames, decode_all, write_video
 from logpolar_track import video as video_module
 from logpolar_track.errors import OutputError, VideoError
 from logpolar_track.video import FALLBACK_FPS, VideoReader, VideoWriter, temporary_path
 
 
-def _decode_all(path):
-    cap = cv2.VideoCapture(str(path))
-    frames = []
-    while True:
-        ok, frame = cap.read()
-        if not ok:
-            break
-        frames.append(frame)
-    cap.release()
-    return frames
-
-
 @pytest.mark.parametrize("name", ["clip.mp4", "clip.avi"])
 def test_reader_yields_every_frame_with_index_and_time(make_video, tmp_path, name):
     clip = make_video(tmp_path, name, fps=29.97)
-    expected = _decode_all(clip.path)
+    expected = decode_all(clip.path)
     with VideoReader(clip.path) as reader:
         assert (reader.width, reader.height) == clip.size
         assert reader.fps == pytest.approx(29.97, abs=0.01)  # a float, not truncated to 29
@@ -47,7 +35,7 @@ def test_reader_yields_every_frame_with_index_and_time(make_video, tmp_path, nam
 
 
 def test_start_frame_skips_exactly(tiny_video):
-    expected = _decode_all(tiny_video.path)
+    expected = decode_all(tiny_video.path)
     with VideoReader(tiny_video.path, start_frame=7) as reader:
         items = list(reader)
     assert [i for i, _, _ in items] == list(range(7, tiny_video.n_frames))

@@ -1576,11 +1576,11 @@ _RESUME_OVER_DROP = 4.0 / 3.0
 #: ... and at a filter response at least this many times ``psr_learn`` sharp (the peak-to-sidelobe ratio): a patch of
 #: background the estimate had wandered onto while lost matched just above the resume level (0.31 against 0.30) with
 #: a PSR of 8.6, and was reported tracked from then on. Generated objects leaving the view for good (four frame and
-#: object sizes, tilted ellipses, seeds 0-7; tests/test_lpcf.py): runs reported tracked on background while the
-#: object was away 3 of 32 -> 2, frames 3.6 % -> 0.5 %; on seeds 8-19, 12 of 48 -> 9, 17.6 % -> 11.6 % (what is left
-#: is the long-term search finding background, whose texture here is drawn like the object's, with a sharp
-#: response). Real sequences, 13 starts: 0.4797 -> 0.4779, from the box 0.568 -> 0.567; off-object frames reported
-#: lost 78.1 % -> 79.8 %, on-object ones 13.7 % -> 14.5 %. At 0.85 / 1.0: 0.4749 / 0.4759.
+#: object sizes, tilted ellipses, seeds 0-7): runs reported tracked on background while the object was away 3 of 32
+#: -> 2, frames 3.6 % -> 0.5 %; on seeds 8-19, 12 of 48 -> 9, 17.6 % -> 11.6 % (what is left is the long-term search
+#: finding background, whose texture here is drawn like the object's, with a sharp response); two of the runs it
+#: mends are tests/test_lpcf.py's. Real sequences, 13 starts: 0.4797 -> 0.4779, from the box 0.568 -> 0.567;
+#: off-object frames reported lost 78.1 % -> 79.8 %, on-object ones 13.7 % -> 14.5 %. At 0.85 / 1.0: 0.4749 / 0.4759.
 _RESUME_PSR = 0.7
 #: Rate of the running mean misses of the prediction (see ``_prediction_gain``). A disc under independent camera
 #: jitter of +-25 px a frame: tracked on 94-99 % of the frames (seeds 0-3), against 41-95 % with the full

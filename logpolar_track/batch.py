@@ -220,9 +220,9 @@ def read_roi_file(path) -> list[RoiEntry]:
 
     A CSV file with one video per line: ``video,roi[,start_frame][,tracker]``. ``roi`` is ``cx,cy,r`` or
     ``cx,cy,a,b,angle`` (pixels; degrees counter-clockwise on screen) and may be quoted or not
-    (``clip.mp4,"320,240,40",0,lpcf`` and ``clip.mp4,320,240,40,0,lpcf`` are the same). An optional header line
-    starts with ``video``; blank lines and lines starting with ``#`` are ignored. Relative video paths are
-    relative to the ROI file's folder.
+    (``clip.mp4,"320,240,40",0,lpcf`` and ``clip.mp4,320,240,40,0,lpcf`` are the same). An optional header line,
+    before the first entry (comments may come before it), starts with ``video``; blank lines and lines starting
+    with ``#`` are ignored. Relative video paths are relative to the ROI file's folder.
 
     Raises
     ------
@@ -239,11 +239,14 @@ def read_roi_file(path) -> list[RoiEntry]:
     entries: list[RoiEntry] = []
     seen: dict[Path, int] = {}
     expected = f"video,roi[,start_frame][,tracker] with roi {ROI_SYNTAX}"
+    header_allowed = True  # on the first line that is not blank or a comment
     for number, row in enumerate(csv.reader(io.StringIO(text)), start=1):
         if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
             continue
-        if number == 1 and row[0].strip().lower() == "video":
+        if header_allowed and row[0].strip().lower() == "video":
+            header_allowed = False
             continue
+        header_allowed = False
         where = f"ROI file '{path}' line {number}"
         video_text = row[0].strip()
         if not video_text:

@@ -34,10 +34,10 @@ from typing import Iterable, Sequence
 import cv2
 import numpy as np
 
+from .datasets import load_ground_truth
 from .draw import LOST_COLOUR, TRACKED_COLOUR, draw_state
 from .errors import FrameRangeError, OutputError, RoiError, UsageError, VideoError, counted
-from .evaluate import (GroundTruthError, Track, read_data_file, read_ground_truth, rotation_errors, scale_errors,
-                       score_track)
+from .evaluate import GroundTruthError, Track, read_data_file, rotation_errors, scale_errors, score_track
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
 from .results import COLUMNS, STATUSES, FrameResult
 from .trackers.base import TrackState
@@ -704,7 +704,8 @@ def plot_track(run, out_png, *, video=None, ground_truth=None, overwrite: bool =
     video : str or Path, optional
         The tracked video, for the thumbnail.
     ground_truth : str, Path or GroundTruth, optional
-        Any format :func:`~logpolar_track.evaluate.read_ground_truth` reads; errors come from
+        A file or sequence folder as ``lptrack eval`` takes
+        (:func:`~logpolar_track.datasets.load_ground_truth`); errors come from
         :func:`~logpolar_track.evaluate.score_track`.
     overwrite : bool
     title : str, optional
@@ -713,7 +714,7 @@ def plot_track(run, out_png, *, video=None, ground_truth=None, overwrite: bool =
     ------
     UsageError
         matplotlib is missing (the message is the install hint), or ``out_png`` does not end in .png, .pdf or .svg.
-    GroundTruthError, VideoError, OutputError
+    GroundTruthError, VideoError, OutputError, InputError
     """
     check_image_suffix(out_png, PLOT_SUFFIXES, "output image")
     hint = matplotlib_hint()
@@ -721,7 +722,7 @@ def plot_track(run, out_png, *, video=None, ground_truth=None, overwrite: bool =
         raise UsageError(hint)
     table = _as_table(run)
     out_png = check_output_path(out_png, overwrite=overwrite, what="output image")
-    gt = read_ground_truth(ground_truth) if isinstance(ground_truth, (str, os.PathLike)) else ground_truth
+    gt = load_ground_truth(ground_truth) if isinstance(ground_truth, (str, os.PathLike)) else ground_truth
     thumb = read_frame(video, int(table.frames[0])) if video is not None else None
 
     import matplotlib

@@ -251,6 +251,11 @@ def _progress_callback(progress: ProgressLike, total: int | None):
     return update, bar.close
 
 
+#: Extensions a per-frame table is refused under, beside the videos'
+#: (:data:`~logpolar_track.video.CODECS_BY_EXTENSION`).
+_IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".gif", ".bmp", ".tif", ".tiff", ".webp")
+
+
 def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> None:
     """Raise before any work if an output cannot be written (see :func:`run_video`)."""
     planned = []
@@ -262,6 +267,10 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
                              f"'{Path(video_out).suffix}'; use one of {', '.join(CODECS_BY_EXTENSION)}")
         planned.append((Path(video_out), "output video"))
     if csv_out is not None and str(csv_out) != "-":
+        if Path(csv_out).suffix.lower() in (*CODECS_BY_EXTENSION, *_IMAGE_SUFFIXES):
+            # A table named as a video or an image is a slip (`--csv out.mp4` for `-o out.mp4`), not a wish.
+            raise UsageError(f"cannot write the CSV to '{csv_out}': '{Path(csv_out).suffix}' is a video's or an "
+                             f"image's extension; name it .csv (or .jsonl), or give the video with -o")
         planned.append((Path(csv_out), "output CSV"))
     for out, what in planned:
         check_output_path(out, overwrite=overwrite, what=what, special_ok=what == "output CSV")

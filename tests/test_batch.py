@@ -294,7 +294,11 @@ def test_roi_file_parsing(tmp_path):
     assert entries[0].roi == Ellipse(320, 240, 60, 30, 15) and entries[0].start_frame is None
     assert entries[1].tracker == "lpcf" and entries[1].roi == Ellipse.circle(1, 2, 3)
     assert entries[2].start_frame == 7 and entries[2].roi == Ellipse(1, 2, 3, 4, 5)
+    # A header may follow comments and blank lines, but not an entry.
+    (tmp_path / "h.csv").write_text("# made by hand\n\nVideo,roi,start_frame,tracker\n" + text)
+    assert read_roi_file(tmp_path / "h.csv") == entries
     for bad, fragment in (("a.mp4,1,2\n", "line 1: expected video,roi"),
+                          ("a.mp4,1,2,3\nvideo,roi\n", "line 2: expected video,roi"),
                           ("a.mp4,1,2,3\nb.mp4,1,2,3,x,y\n", "line 2"),
                           ("a.mp4,1,2,3,nosuch\n", ("bad.csv' line 1: in the tracker column, unknown tracker "
                                                     "'nosuch'; choose one of: ")),
@@ -322,7 +326,7 @@ def test_roi_file_listing_no_videos_is_a_usage_error_as_empty_stdin_is(work):
             (("--roi-file", "empty.csv"), None, ("no videos found in ROI file 'empty.csv': write one line per "
                                                  "video, video,roi[,start_frame][,tracker]")),
             (("--roi-file", "header.csv"), None, "no videos found in ROI file 'header.csv': "),
-            (("-",), "", "no videos found in '-'")):
+            (("-",), "", "no videos found in stdin")):
         result = invoke(*args, "--no-video", stdin=stdin)
         assert result.exit_code == 2, result.stderr
         lines = result.stderr.splitlines()

@@ -258,11 +258,16 @@ def test_bench_from_several_starts_gives_their_mean(dataset):
     assert res.stderr.startswith("Means over 3 starts per sequence")
 
 
+SPEED_TAKES_NO = "no --dataset, --per-frame, --plot, --starts, --threads, --param, --jobs or --scheduler"
+
+
 @pytest.mark.parametrize("args, message", [
     (["--starts", "14"], "1<=x<=13"),
-    (["--starts", "2", "--speed"], "no --dataset, --per-frame, --plot, --starts, --threads or --param"),
-    (["--threads", "2", "--speed"], "no --dataset, --per-frame, --plot, --starts, --threads or --param"),
-    (["--param", "window=9", "--speed"], "no --dataset, --per-frame, --plot, --starts, --threads or --param"),
+    (["--starts", "2", "--speed"], SPEED_TAKES_NO),
+    (["--threads", "2", "--speed"], SPEED_TAKES_NO),
+    (["--param", "window=9", "--speed"], SPEED_TAKES_NO),
+    (["--jobs", "2", "--speed"], SPEED_TAKES_NO),
+    (["--scheduler", "tcp://127.0.0.1:1", "--speed"], SPEED_TAKES_NO),
     (["--param", "nosuch=9"], "no parameter 'nosuch' in fixed: fixed takes window (11)"),
     (["--param", "window"], "--param takes NAME=VALUE"),
     (["--threads", "0"], "x>=1")])

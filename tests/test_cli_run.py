@@ -518,6 +518,59 @@ def test_stdout_that_cannot_be_written_is_one_line(tiny_video, workdir):
     assert proc.stderr.strip() == "lptrack: error: cannot write the rows to stdout: No space left on device"
 
 
+def _data_commands(tiny_video, workdir) -> dict[str, list[str]]:
+    """Commands whose data goes to stdout (a ROI spec, a table, JSON, help, the version)."""
+    run_csv = workdir / "run.csv"
+    run_csv.write_text(",".join(COLUMNS) + "\n" + "".join(f"{i},0,1,1,1,1,0,1,0,1,tracked\n" for i in range(150)))
+    gt = Path(__file__).resolve().parents[1] / "sample_videos" / "spin.gt.csv"  # 150 frames
+    return {"roi": ["roi", str(tiny_video.path), "--from-box", "20,20,30,30"],
+            "eval": ["eval", str(run_csv), str(gt)],
+            "eval --json -": ["eval", str(run_csv), str(gt), "--json", "-"],
+            "run --help": ["run", "--help"],
+            "--version": ["--version"]}
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_every_command_writing_data_to_stdout_ends_in_one_line_or_quietly(tiny_video, workdir):
+    """A full disk behind stdout is one line and exit 1, as for `run --csv -`; a reader that left (`| head`) ends
+    quietly with 141; a closed stdout (`>&-`) is an error, not data lost in silence."""
+    def lptrack(args, **how):
+        return subprocess.run([sys.executable, "-m", "logpolar_track", *args], stderr=subprocess.PIPE, text=True,
+                              timeout=120, **how)
+
+    for name, args in _data_commands(tiny_video, workdir).items():
+        assert lptrack(args, stdout=subprocess.PIPE).returncode == 0, name
+        with open("/dev/full", "w") as full:
+            proc = lptrack(args, stdout=full)
+        assert (proc.returncode, proc.stderr) == (1, "lptrack: error: cannot write to stdout: No space left on "
+                                                     "device\n"), name
+        read_end, write_end = os.pipe()
+        os.close(read_end)  # the reader has gone before the first write
+        try:
+            proc = lptrack(args, stdout=write_end)
+        finally:
+            os.close(write_end)
+        assert (proc.returncode, proc.stderr) == (141, ""), name
+    for name in ("roi", "eval"):
+        proc = lptrack(_data_commands(tiny_video, workdir)[name], preexec_fn=lambda: os.close(1))
+        assert (proc.returncode, proc.stderr) == (1, "lptrack: error: cannot write to stdout: it is closed\n"), name
+
+
+def test_jobs_and_scheduler_contradict_each_other(tiny_video, workdir):
+    result = invoke(tiny_video.path.parent, "--scheduler", "tcp://127.0.0.1:1", "--jobs", "2", "--no-video")
+    assert result.exit_code == 2 and "--jobs and --scheduler contradict each other" in result.stderr
+    result = CliRunner().invoke(main, ["bench", "--scheduler", "tcp://127.0.0.1:1", "--jobs", "1"])
+    assert result.exit_code == 2 and "--jobs and --scheduler contradict each other" in result.stderr
+
+
+def test_a_csv_named_as_a_video_is_refused_before_any_work(tiny_video, workdir):
+    for name in ("out.mp4", "out.PNG"):
+        result = invoke(tiny_video.path, "--no-video", "--csv", name)
+        assert result.exit_code == 2
+        assert f"cannot write the CSV to '{name}'" in result.stderr and "name it .csv (or .jsonl)" in result.stderr
+    assert listing(workdir) == []
+
+
 @pytest.mark.skipif(not os.path.exists("/dev/stdout"), reason="needs /dev/stdout")
 def test_csv_to_dev_stdout_redirected_to_a_file_is_written_not_replaced(tiny_video, workdir):
     # /dev/stdout links to the open file: renaming a finished temporary file over it would replace the link.

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import math
+import shutil
 import sys
 from pathlib import Path
 
@@ -395,6 +396,20 @@ def test_plot_has_the_expected_size_with_and_without_ground_truth(tiny_run, tmp_
     assert result.exit_code == 0, result.stderr
     assert png_size(out_gt) == PLOT_SIZE
     assert "--overwrite" in one_error_line(invoke("plot", run_csv, "-o", out, "--no-video"), 1)
+
+
+@needs_matplotlib
+def test_plot_takes_a_sequence_folder_as_ground_truth_as_eval_does(tiny_run, tmp_path):
+    video, run_csv, gt = tiny_run
+    folder = tmp_path / "tiny"
+    folder.mkdir()
+    shutil.copy(video.path, folder / "tiny.mp4")
+    shutil.copy(gt, folder / "tiny.gt.csv")
+    from_file, from_folder = tmp_path / "file.png", tmp_path / "folder.png"
+    assert invoke("plot", run_csv, "-o", from_file, "--gt", gt, "--no-video").exit_code == 0
+    result = invoke("plot", run_csv, "-o", from_folder, "--gt", folder, "--no-video")
+    assert result.exit_code == 0, result.stderr
+    assert from_folder.read_bytes() == from_file.read_bytes()
 
 
 @needs_matplotlib

@@ -8,8 +8,10 @@ on stderr and an exit code: 0 success (lost frames are data), 1 runtime failure,
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
+import sys
 import threading
 
 # FFmpeg's own messages ("moov atom not found") and OpenCV's warnings (one per frame when a disk fills up)
@@ -24,7 +26,7 @@ import click  # noqa: E402
 import cv2  # noqa: E402
 
 from .. import __version__  # noqa: E402
-from ..errors import LptrackError, RoiError, UsageError  # noqa: E402
+from ..errors import LptrackError, OutputError, RoiError, UsageError  # noqa: E402
 from ..geometry import ROI_SYNTAX, Ellipse, parse_roi  # noqa: E402
 from ..video import keep_frames_off_the_heap  # noqa: E402
 
@@ -72,12 +74,16 @@ class LptrackGroup(click.Group):
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         # `lptrack --bogus`: parsed before invoke() below, so the one line is written here.
         try:
-            return super().parse_args(ctx, args)
+            with stdout_failures():  # help or the version goes to stdout
+                return super().parse_args(ctx, args)
         except click.exceptions.NoArgsIsHelpError:
             raise  # plain `lptrack` shows the help
         except click.UsageError as exc:
             click.echo(f"lptrack: error: {exc.format_message()} (see 'lptrack --help')", err=True)
             ctx.exit(EXIT_USAGE)
+        except OutputError as exc:  # `lptrack --help > /dev/full`: not yet inside invoke() below
+            click.echo(f"lptrack: error: {exc}", err=True)
+            ctx.exit(exc.exit_code)
 
     def resolve_command(self, ctx: click.Context, args: list[str]):
         try:
@@ -136,9 +142,53 @@ class OneLineErrors(click.Command):
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         try:
-            return super().parse_args(ctx, args)
+            with stdout_failures():  # help or the version goes to stdout
+                return super().parse_args(ctx, args)
         except click.UsageError as exc:
             raise UsageError(f"{exc.format_message()} (see 'lptrack {self.name} --help')") from None
+
+
+def _stdout_to_devnull() -> None:
+    """Point file descriptor 1 at the null device, so that Python's flush of stdout at exit, which would fail
+    again (and print "Exception ignored ..."), succeeds; nothing where stdout is not a file (a test runner's)."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
+
+
+def stdout_reader_left() -> None:
+    """The reader of stdout went away (``| head``): stop quietly with :data:`EXIT_BROKEN_PIPE`, as a program
+    killed by SIGPIPE would."""
+    _stdout_to_devnull()
+    sys.exit(EXIT_BROKEN_PIPE)
+
+
+@contextlib.contextmanager
+def stdout_failures():
+    """Writes to stdout within: a reader that left ends lptrack quietly (:func:`stdout_reader_left`); any other
+    failed write (a full disk behind it) is an :class:`OutputError` (one line, exit 1)."""
+    try:
+        yield
+    except BrokenPipeError:
+        stdout_reader_left()
+    except OSError as exc:
+        _stdout_to_devnull()
+        raise OutputError(f"cannot write to stdout: {exc.strerror or exc}") from None
+
+
+def write_stdout(text: str) -> None:
+    """Data on stdout (a table, JSON, written paths), flushed at once so that a failure shows here:
+    see :func:`stdout_failures`; a closed stdout (``>&-``) is an :class:`OutputError` too, not data lost in
+    silence."""
+    if sys.stdout is None:
+        raise OutputError("cannot write to stdout: it is closed")
+    with stdout_failures():
+        sys.stdout.write(text)
+        sys.stdout.flush()
 
 
 def parse_roi_option(spec: str) -> Ellipse:
@@ -148,6 +198,14 @@ def parse_roi_option(spec: str) -> Ellipse:
     except RoiError as exc:
         message = str(exc)
         raise RoiError(message if ROI_SYNTAX in message else f"{message}; expected {ROI_SYNTAX}") from None
+
+
+def check_jobs_or_scheduler(jobs_given: bool, scheduler: str | None) -> None:
+    """``--jobs`` and ``--scheduler`` contradict each other: the cluster's workers, not local processes, run the
+    work (``run`` and ``bench`` take one or the other)."""
+    if jobs_given and scheduler is not None:
+        raise UsageError("--jobs and --scheduler contradict each other: with --scheduler the cluster's workers "
+                         "run the work; give one of them")
 
 
 #: Help of ``--param``, shared by ``lptrack run`` and ``lptrack bench``.

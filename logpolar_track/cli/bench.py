@@ -14,7 +14,8 @@ from ..errors import UsageError
 from ..executor import TRACKING_OPENCV_THREADS
 from ..look import PLOT_SUFFIXES, check_image_suffix
 from ..video import check_output_path
-from . import EXIT_FAILURE, PARAM_HELP, OneLineErrors, main, parse_param_options
+from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, check_jobs_or_scheduler, main, parse_param_options,
+               write_stdout)
 
 
 _BENCH_EPILOG = """\b
@@ -95,10 +96,13 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     thesis' Table 4.1, decode and decode + encode baselines, and 'lptrack run'
     with and without video output as a share of them.
     """
+    jobs_given = click.get_current_context().get_parameter_source("jobs") is not click.core.ParameterSource.DEFAULT
     if speed:
-        if datasets or per_frame or plot_out is not None or starts != 1 or threads is not None or params:
+        if (datasets or per_frame or plot_out is not None or starts != 1 or threads is not None or params
+                or jobs_given or scheduler is not None):
             raise UsageError("--speed times trackers on a synthetic video on one core; it takes no --dataset, "
-                             "--per-frame, --plot, --starts, --threads or --param")
+                             "--per-frame, --plot, --starts, --threads, --param, --jobs or --scheduler")
+    check_jobs_or_scheduler(jobs_given, scheduler)
     # Outputs are checked before the work (a benchmark may run for hours), as `lptrack run` checks its own.
     _check_json_out(json_out, overwrite)
     if speed:
@@ -207,11 +211,10 @@ def _emit(table: str, doc: dict | None, json_out: str | None) -> None:
         text = json.dumps(doc, indent=1) + "\n"
         if json_out == "-":
             click.echo(table, err=True, nl=False)
-            sys.stdout.write(text)
-            sys.stdout.flush()
+            write_stdout(text)
             return
         write_text_atomic(json_out, text)
-    click.echo(table, nl=False)
+    write_stdout(table)
 
 
 @main.command("eval", cls=OneLineErrors)
@@ -245,12 +248,11 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, ove
     row = {"sequence": prediction.name, "tracker": "(csv)", **metrics}
     table = format_table([row], [], speed=False)
     if json_out is None:
-        click.echo(table, nl=False)
+        write_stdout(table)
         return
     text = json.dumps(eval_document(prediction, ground_truth, metrics), indent=1) + "\n"
     if json_out == "-":
-        sys.stdout.write(text)
-        sys.stdout.flush()
+        write_stdout(text)
     else:
         write_text_atomic(json_out, text)
-        click.echo(table, nl=False)
+        write_stdout(table)

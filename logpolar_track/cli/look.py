@@ -15,7 +15,7 @@ from ..geometry import check_roi_fits
 from ..look import (PLOT_SUFFIXES, ROUND_TOLERANCE, SHEET_ROWS, check_image_suffix, describe_video_search,
                     find_video_for_csv, matplotlib_hint, plot_track, read_frame, read_run_csv, roi_from_box,
                     roi_from_points, write_contact_sheet, write_frame_png)
-from . import OneLineErrors, main, parse_roi_option
+from . import OneLineErrors, main, parse_roi_option, write_stdout
 
 
 def _run_stem(csv_path: Path) -> str:
@@ -57,7 +57,7 @@ def frame(video: Path, index: int | None, time_s: float | None, out_png: Path | 
         raise UsageError("--at and --time contradict each other; give one of them")
     roi = parse_roi_option(roi_spec) if roi_spec is not None else None
     path = write_frame_png(video, out_png, index=index, time_s=time_s, grid=grid, roi=roi, overwrite=overwrite)
-    click.echo(str(path))
+    write_stdout(str(path) + "\n")
 
 
 @main.command("roi", cls=OneLineErrors, epilog=f"""\b
@@ -98,7 +98,7 @@ def roi(video: Path, index: int, box: str | None, points: str | None, round_tol:
     shot = read_frame(video, index)
     check_roi_fits(result, shot.width, shot.height, source=f"'{video.name}' (frame {index})")
     spec = result.to_spec()
-    click.echo(spec)
+    write_stdout(spec + "\n")
     click.echo(f"lptrack: check it with: lptrack frame {video} --at {index} --roi {spec}", err=True)
 
 
@@ -118,9 +118,9 @@ Examples:
 @click.argument("run_csv", type=click.Path(dir_okay=False, path_type=Path), metavar="RUN.csv")
 @click.option("-o", "--out", "out_png", type=click.Path(dir_okay=False, path_type=Path), metavar="PNG",
               help="Figure to write: .png, or .pdf or .svg. Default: <RUN stem>.plot.png in the current folder.")
-@click.option("--gt", "gt_path", type=click.Path(dir_okay=False, path_type=Path), metavar="GT",
+@click.option("--gt", "gt_path", type=click.Path(path_type=Path), metavar="GT",
               help="Ground truth to overlay and score: lptrack .gt.csv, OTB/UAV123 x,y,w,h .txt, VOT "
-                   "groundtruth.txt.")
+                   "groundtruth.txt, or a sequence folder holding one (as 'lptrack eval').")
 @click.option("--video", "video", type=_VIDEO, metavar="VIDEO", help="The tracked video, for the thumbnail.")
 @click.option("--no-video", is_flag=True, help="No thumbnail, even if the video can be found.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing PNG.")
@@ -156,7 +156,7 @@ def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path 
     path = plot_track(table, out_png, video=video, ground_truth=gt_path, overwrite=overwrite)
     if note is not None and not quiet:
         click.echo(note, err=True)  # after the plot, so that a failure is one error line, not a note before it
-    click.echo(str(path))
+    write_stdout(str(path) + "\n")
 
 
 @main.command("sheet", cls=OneLineErrors, epilog="""\b
@@ -192,4 +192,4 @@ def sheet(video: Path, run_csv: Path, out_png: Path | None, cols: int, rows: int
     out_png = out_png or Path(f"{_run_stem(run_csv)}.sheet.png")
     path = write_contact_sheet(video, table, out_png, cols=cols, rows=rows, count=count, width=width,
                                overwrite=overwrite)
-    click.echo(str(path))
+    write_stdout(str(path) + "\n")

@@ -8,7 +8,6 @@ processes or on a Dask cluster, one failing video never stops the others, and a 
 from __future__ import annotations
 
 import contextlib
-import os
 import select
 import sys
 import textwrap
@@ -26,7 +25,8 @@ from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, defau
 from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..video import make_output_folder, remove_empty_folders
-from . import EXIT_BROKEN_PIPE, EXIT_FAILURE, PARAM_HELP, OneLineErrors, main, parse_param_options, parse_roi_option
+from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, check_jobs_or_scheduler, main, parse_param_options,
+               parse_roi_option, stdout_reader_left)
 
 
 class RunCommand(OneLineErrors):
@@ -166,6 +166,7 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
         raise UsageError("--out and --no-video contradict each other; give one of them")
     if overwrite and skip_existing:
         raise UsageError("--overwrite and --skip-existing contradict each other; give one of them")
+    check_jobs_or_scheduler(jobs is not None, scheduler)
     if not videos and roi_file is None:
         raise UsageError("give a VIDEO (a file, a folder, or '-' for paths on stdin), or --roi-file "
                          "(see 'lptrack run --help')")
@@ -203,7 +204,7 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     inputs = find_videos(videos, on_duplicate=named_again)
     if videos and not inputs:
         searched = any(v != "-" and Path(v).is_dir() for v in videos)
-        raise UsageError(f"no videos found in {', '.join(repr(v) for v in videos)}" +
+        raise UsageError(f"no videos found in {', '.join('stdin' if v == '-' else repr(v) for v in videos)}" +
                          (f" (folders are searched for {', '.join(VIDEO_EXTENSIONS[:5])}, ... files)" if searched
                           else ""))
     plan = plan_batch(inputs, roi=roi, roi_entries=entries, tracker=tracker, start_frame=start_frame,
@@ -258,13 +259,6 @@ def _reader_left(stream) -> bool:
     return any(events & (select.POLLERR | select.POLLHUP) for _, events in poller.poll(0))
 
 
-def _stdout_closed() -> None:
-    """`lptrack run ... --csv - | head`: the reader left; stop quietly, without Python's shutdown noise."""
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, sys.stdout.fileno())
-    sys.exit(EXIT_BROKEN_PIPE)
-
-
 def _run_one(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, max_frames: int | None,
              video_out: Path | None, csv_out: str | None, out_dir: Path | None, data_format: str, no_video: bool,
              overwrite: bool, skip_existing: bool, quiet: bool) -> None:
@@ -300,9 +294,9 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
                             progress=show and sys.stderr.isatty(), csv_options={"data_format": data_format},
                             tracker_params=tuning)
     except BrokenPipeError:
-        _stdout_closed()
+        stdout_reader_left()
     if csv_out == "-" and _reader_left(sys.stdout):
-        _stdout_closed()  # `| head` left after the last rows went into the pipe: as if their write had failed
+        stdout_reader_left()  # `| head` left after the last rows went into the pipe: as if their write had failed
     if not show:
         return
     if roi is None and start_frame > 0 and any(p.is_file() for p in roi_sidecar_paths(video)):
@@ -353,7 +347,7 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
     def stop_if_reader_left() -> None:
         # No more work for rows no one reads: SystemExit stops the workers and removes their temporary files.
         if stream and _reader_left(sys.stdout):
-            _stdout_closed()
+            stdout_reader_left()
 
     def on_progress(progress: BatchProgress) -> None:
         bar.total = progress.frames_total
@@ -374,7 +368,7 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
                                 on_progress=None if bar is None else on_progress)
         stop_if_reader_left()
     except BrokenPipeError:
-        _stdout_closed()
+        stdout_reader_left()
     finally:
         if bar is not None:
             bar.close()

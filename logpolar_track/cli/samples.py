@@ -9,7 +9,7 @@ import click
 
 from ..errors import OutputError
 from ..samples import DEFAULT_SEED, SAMPLE_NAMES, PhotoSources, build_scene, write_readme, write_sample
-from . import main
+from . import main, write_stdout
 
 
 @main.command("samples")
@@ -46,6 +46,6 @@ def samples(out_dir: Path, only: tuple[str, ...], seed: int, quiet: bool) -> Non
         else:
             paths = write_sample(scene, out_dir)
         for path in paths:
-            click.echo(str(path))
+            write_stdout(str(path) + "\n")
     if not only:
-        click.echo(str(write_readme(scenes, out_dir, seed)))
+        write_stdout(str(write_readme(scenes, out_dir, seed)) + "\n")

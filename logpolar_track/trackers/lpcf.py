@@ -488,6 +488,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.cursor = self._last_good = first
         self.misses = 0
         self._search_part = 0  # the next part of the frame to search (see _frame_candidates)
+        self._search_parts = 1  # parts of the last map searched
         self._learnable = 0
         self._blur_cache = self._grey_cache = None  # the first frame is not needed any more
 
@@ -771,18 +772,27 @@ class LogPolarCorrelationTracker(SimilarityTracker):
 
         The search is at the scale and angle of the last frame that was not a drop: while the object is away,
         the estimate's own scale and angle follow whatever is there (seen 20 degrees off after 30 frames, where
-        the filter no longer recognised the object when it came back).
+        the filter no longer recognised the object when it came back). After ``_SEARCH_AS_LEFT`` sweeps of the
+        frame, every other sweep is at that pose turned or resized (``_SEARCH_POSES``), for an object that comes
+        back changed.
         """
         if (self.misses - self.redetect_after) % _SEARCH_EVERY:
             return best, psr, peak
         if self.misses == self.redetect_after:
             self._search_part = 0  # a new search starts with the part nearest the object's last place
-        pose = self._last_good
+        last = self._last_good
+        sweep = self._search_part // self._search_parts
+        turn, size = ((0.0, 1.0) if sweep < _SEARCH_AS_LEFT
+                      else _SEARCH_POSES[(sweep - _SEARCH_AS_LEFT) % len(_SEARCH_POSES)])
+        pose = Similarity(last.cx, last.cy, last.scale * size, last.rotation_deg + turn, last.score)
         centres = self._frame_candidates(frame, pose, _SEARCH_CANDIDATES)
         found = None
+        turned_or_resized = (turn, size) != (0.0, 1.0)
         for cx, cy in centres:
             candidate = Similarity(float(cx), float(cy), pose.scale, pose.rotation_deg, state.score)
             moved, cand_psr, cand_peak = self._translate(frame, candidate)
+            if turned_or_resized and cand_psr < _SEARCH_POSE_PSR * self.psr_learn:
+                continue
             if cand_psr > psr and (found is None or cand_psr > found[1]):
                 found = moved, cand_psr, cand_peak
         if found is None:
@@ -882,6 +892,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         order = np.argsort(np.hypot(xs - pose.cx, ys - pose.cy), kind="stable")
         index = order[self._search_part % len(order)]
         self._search_part += 1
+        self._search_parts = len(order)
         centre = Similarity(float(xs[index]), float(ys[index]), 2 * pose.scale, pose.rotation_deg, 0.0)
         # The anti-aliasing blur follows the map's spacing, and the crop blurred for it is not the patches' (see
         # _patch): put back the tracker's own scale and forget the crop afterwards.
@@ -1594,6 +1605,21 @@ _PREDICTION_RATE = 0.2
 #: per feature channel; reducing the map further instead missed a 20 px object there), and the
 #: ``_SEARCH_CANDIDATES`` strongest places are tried (1 or 2: the same figures).
 _SEARCH_EVERY, _SEARCH_PART, _SEARCH_CANDIDATES = 3, 512, 2
+#: While lost, the first ``_SEARCH_AS_LEFT`` searches of the frame (whole sweeps over its parts) look for the object
+#: at the scale and angle it had when last tracked; then every other sweep turns or resizes it by one of
+#: ``_SEARCH_POSES`` ((degrees counter-clockwise, size factor)), for an object that comes back changed, and a place
+#: found so is taken only at a filter response ``_SEARCH_POSE_PSR`` times ``psr_learn`` sharp.
+#: Generated objects away for 30 frames and back elsewhere (3 frame sizes x 4 seeds), found again: back turned by
+#: 20 degrees 5 of 12 -> 12, by 35 degrees 2 -> 6, 1.25 times larger 7 -> 11, unchanged 12 -> 12 (as quickly:
+#: median 2 frames); turned by 25 degrees and 0.8 times the size, 1 -> 1. Without the sharper response for these
+#: places (1.0 times ``psr_learn``): 12, 10, 12, 12 found, but objects gone for good reported tracked on
+#: background in 14 of 80 runs against 11 (with it: the same 11 runs, and 2 of 24 of the objects vanishing in
+#: mid-frame, as before); turning and resizing from the first sweep: the real sequences' 13-start mean IoU AUC
+#: 0.4779 -> 0.4748 (bag 0.427 -> 0.417), with the first 3 sweeps as now 0.4773 (freeman1 0.359 -> 0.355, the
+#: others within 0.001; from the box unchanged).
+_SEARCH_AS_LEFT = 3
+_SEARCH_POSES = ((0.0, 1.0), (25.0, 1.0), (0.0, 1.0), (-25.0, 1.0), (0.0, 1.0), (0.0, 1.25), (0.0, 1.0), (0.0, 0.8))
+_SEARCH_POSE_PSR = 1.3
 #: Padded sizes whose kernel spectra a whole-frame search filter keeps, the least recently used dropped first. The
 #: long-term filter lives as long as the track, and a drifting scale gives each search new map sizes: kept without
 #: a bound, freeman1's 325 frames had left 32 sizes (56 MB) in it, and a part of a large frame takes about 10 MB.

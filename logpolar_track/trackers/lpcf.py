@@ -489,6 +489,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.misses = 0
         self._search_part = 0  # the next part of the frame to search (see _frame_candidates)
         self._search_parts = 1  # parts of the last map searched
+        self._redetect_sweep = self._redetect_part = 0  # the re-detection's sweep (pose) and part (see _redetect)
         self._learnable = 0
         self._blur_cache = self._grey_cache = None  # the first frame is not needed any more
 
@@ -779,13 +780,21 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         if (self.misses - self.redetect_after) % _SEARCH_EVERY:
             return best, psr, peak
         if self.misses == self.redetect_after:
-            self._search_part = 0  # a new search starts with the part nearest the object's last place
+            # A new search starts with the part nearest the object's last place, at its last pose.
+            self._redetect_sweep, self._redetect_part = 0, 0
         last = self._last_good
-        sweep = self._search_part // self._search_parts
+        sweep = self._redetect_sweep
         turn, size = ((0.0, 1.0) if sweep < _SEARCH_AS_LEFT
                       else _SEARCH_POSES[(sweep - _SEARCH_AS_LEFT) % len(_SEARCH_POSES)])
         pose = Similarity(last.cx, last.cy, last.scale * size, last.rotation_deg + turn, last.score)
+        # Its own part and sweep counts: a turned or resized map has another number of parts, and the long-term
+        # search keeps its own place in the frame.
+        long_term_part, self._search_part = self._search_part, self._redetect_part
         centres = self._frame_candidates(frame, pose, _SEARCH_CANDIDATES)
+        self._search_part = long_term_part
+        self._redetect_part += 1
+        if self._redetect_part >= self._search_parts:  # every part of this pose's map searched: the next pose
+            self._redetect_sweep, self._redetect_part = sweep + 1, 0
         found = None
         turned_or_resized = (turn, size) != (0.0, 1.0)
         for cx, cy in centres:

@@ -527,6 +527,7 @@ def _data_commands(tiny_video, workdir) -> dict[str, list[str]]:
             "eval": ["eval", str(run_csv), str(gt)],
             "eval --json -": ["eval", str(run_csv), str(gt), "--json", "-"],
             "run --help": ["run", "--help"],
+            "samples --help": ["samples", "--help"],
             "--version": ["--version"]}
 
 

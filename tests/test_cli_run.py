@@ -552,9 +552,13 @@ def test_every_command_writing_data_to_stdout_ends_in_one_line_or_quietly(tiny_v
         finally:
             os.close(write_end)
         assert (proc.returncode, proc.stderr) == (141, ""), name
-    for name in ("roi", "eval"):
-        proc = lptrack(_data_commands(tiny_video, workdir)[name], preexec_fn=lambda: os.close(1))
+    closed = {**_data_commands(tiny_video, workdir),  # and commands that print the path of a file they write
+              "frame": ["frame", str(tiny_video.path), "-o", str(workdir / "f.png")],
+              "eval --json FILE": [*_data_commands(tiny_video, workdir)["eval"], "--json", str(workdir / "m.json")]}
+    for name, args in closed.items():
+        proc = lptrack(args, preexec_fn=lambda: os.close(1))
         assert (proc.returncode, proc.stderr) == (1, "lptrack: error: cannot write to stdout: it is closed\n"), name
+    assert not (workdir / "f.png").exists() and not (workdir / "m.json").exists()  # refused before the work
 
 
 def test_jobs_and_scheduler_contradict_each_other(tiny_video, workdir):

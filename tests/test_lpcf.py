@@ -525,6 +525,45 @@ def test_an_object_back_from_an_absence_turned_is_found_again(size, radius, seed
     assert np.median([abs(s.rotation_deg - p.rotation_deg) for (_, s), p in zip(after, poses[found:])]) < 1.0
 
 
+def test_a_search_in_parts_covers_each_pose_part_by_part_in_turn(monkeypatch):
+    """A frame searched in parts (a small object in a large frame; here a 640 x 480 frame, with parts made small):
+    while lost, each pose's map is searched part after part, each part once, before the next pose, first the last
+    tracked pose for ``_SEARCH_AS_LEFT`` sweeps, then ``_SEARCH_POSES`` in order, though a turned map has more
+    parts than an upright one. (Counting on the part count of whichever map was searched last, poses changed half
+    way through a map, or parts were skipped.)"""
+    from logpolar_track.trackers import lpcf
+
+    monkeypatch.setattr(lpcf, "_SEARCH_PART", 150)
+    searched = []  # (turn from the last tracked angle in degrees, size factor, part, parts) per search
+    frame_candidates = lpcf.LogPolarCorrelationTracker._frame_candidates
+
+    def spy(self, frame, pose, count, long_term=False):
+        part = self._search_part
+        centres = frame_candidates(self, frame, pose, count, long_term)
+        if not long_term:
+            last = self._last_good
+            searched.append((round(pose.rotation_deg - last.rotation_deg, 6), round(pose.scale / last.scale, 6),
+                             part, self._search_parts))
+        return centres
+
+    monkeypatch.setattr(lpcf.LogPolarCorrelationTracker, "_frame_candidates", spy)
+    roi = Ellipse(192.0, 192.0, 30.0, 21.0, 0.0)
+    poses = [Pose(roi.cx + 2 * i, roi.cy + i, 1.0, 0.0) for i in range(30)] + [Pose(-1e4, -1e4, 1.0, 0.0)] * 130
+    run(list(synthetic_sequence(poses, roi, size=(640, 480), seed=0)), roi)
+    sweeps = []
+    for turn, size, part, parts in searched:
+        if part == 0:
+            sweeps.append(((turn, size), parts, []))
+        assert sweeps and sweeps[-1][0] == (turn, size) and sweeps[-1][1] == parts
+        sweeps[-1][2].append(part)
+    assert all(seen == list(range(parts)) for _, parts, seen in sweeps[:-1])
+    assert sweeps[-1][2] == list(range(len(sweeps[-1][2])))
+    order = [(0.0, 1.0)] * lpcf._SEARCH_AS_LEFT + list(lpcf._SEARCH_POSES) * 9
+    assert [pose for pose, _, _ in sweeps] == order[:len(sweeps)]
+    assert len(sweeps) > lpcf._SEARCH_AS_LEFT + len(lpcf._SEARCH_POSES)  # a whole cycle of the poses
+    assert sweeps[0][1] >= 2 and len({parts for _, parts, _ in sweeps}) >= 3  # 2 parts upright, 4 turned, ...
+
+
 def _leaves_and_comes_back_elsewhere(case):
     """Case ``case`` of 24 generated leave-and-return scenes: a textured ellipse (radius 25-45 px, tilted 0-180
     degrees, turning 0.3 degrees a frame) leaves by the right edge at 6-10 px a frame, stays out for 10 frames and

@@ -74,7 +74,7 @@ class LptrackGroup(click.Group):
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         # `lptrack --bogus`: parsed before invoke() below, so the one line is written here.
         try:
-            with stdout_failures():  # help or the version goes to stdout
+            with help_to_stdout():
                 return super().parse_args(ctx, args)
         except click.exceptions.NoArgsIsHelpError:
             raise  # plain `lptrack` shows the help
@@ -142,7 +142,7 @@ class OneLineErrors(click.Command):
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         try:
-            with stdout_failures():  # help or the version goes to stdout
+            with help_to_stdout():
                 return super().parse_args(ctx, args)
         except click.UsageError as exc:
             raise UsageError(f"{exc.format_message()} (see 'lptrack {self.name} --help')") from None
@@ -180,12 +180,30 @@ def stdout_failures():
         raise OutputError(f"cannot write to stdout: {exc.strerror or exc}") from None
 
 
-def write_stdout(text: str) -> None:
-    """Data on stdout (a table, JSON, written paths), flushed at once so that a failure shows here:
-    see :func:`stdout_failures`; a closed stdout (``>&-``) is an :class:`OutputError` too, not data lost in
-    silence."""
+def require_stdout() -> None:
+    """A closed stdout (``>&-``) is an :class:`OutputError`, not data lost in silence. Commands whose data goes
+    to stdout call this before any work too, so that they do not fail after writing their files."""
     if sys.stdout is None:
         raise OutputError("cannot write to stdout: it is closed")
+
+
+@contextlib.contextmanager
+def help_to_stdout():
+    """Parsing the arguments, which may print the help or the version to stdout and exit 0: its failures are
+    those of :func:`stdout_failures`, and a closed stdout, where click prints nothing, is an error too."""
+    with stdout_failures():
+        try:
+            yield
+        except click.exceptions.Exit as exc:
+            if exc.exit_code == 0:
+                require_stdout()
+            raise
+
+
+def write_stdout(text: str) -> None:
+    """Data on stdout (a table, JSON, written paths), flushed at once so that a failure shows here:
+    see :func:`stdout_failures` and :func:`require_stdout`."""
+    require_stdout()
     with stdout_failures():
         sys.stdout.write(text)
         sys.stdout.flush()

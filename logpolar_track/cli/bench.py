@@ -15,7 +15,7 @@ from ..executor import TRACKING_OPENCV_THREADS
 from ..look import PLOT_SUFFIXES, check_image_suffix
 from ..video import check_output_path
 from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, check_jobs_or_scheduler, main, parse_param_options,
-               write_stdout)
+               require_stdout, write_stdout)
 
 
 _BENCH_EPILOG = """\b
@@ -166,7 +166,9 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
 
 
 def _check_json_out(json_out: str | None, overwrite: bool) -> None:
-    """Refuse, before any work, a --json file that cannot be written or exists without --overwrite."""
+    """Refuse, before any work, a closed stdout (the table goes there, or the JSON with ``--json -``) and a --json
+    file that cannot be written or exists without --overwrite."""
+    require_stdout()
     if json_out not in (None, "-"):
         check_output_path(json_out, overwrite=overwrite, what="JSON output", special_ok=True)
 

@@ -15,7 +15,7 @@ from ..geometry import check_roi_fits
 from ..look import (PLOT_SUFFIXES, ROUND_TOLERANCE, SHEET_ROWS, check_image_suffix, describe_video_search,
                     find_video_for_csv, matplotlib_hint, plot_track, read_frame, read_run_csv, roi_from_box,
                     roi_from_points, write_contact_sheet, write_frame_png)
-from . import OneLineErrors, main, parse_roi_option, write_stdout
+from . import OneLineErrors, main, parse_roi_option, require_stdout, write_stdout
 
 
 def _run_stem(csv_path: Path) -> str:
@@ -53,6 +53,7 @@ def frame(video: Path, index: int | None, time_s: float | None, out_png: Path | 
     decoded frame (earlier frames are decoded, not skipped by seeking).
     Prints the PNG's path on stdout.
     """
+    require_stdout()  # for the PNG's path: checked before the PNG is written
     if index is not None and time_s is not None:
         raise UsageError("--at and --time contradict each other; give one of them")
     roi = parse_roi_option(roi_spec) if roi_spec is not None else None
@@ -136,6 +137,7 @@ def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path 
     rotation deg). Needs matplotlib: pip install matplotlib.
     Prints the PNG's path on stdout.
     """
+    require_stdout()  # for the PNG's path: checked before the PNG is written
     if out_png is not None:
         check_image_suffix(out_png, PLOT_SUFFIXES, "output image")
     hint = matplotlib_hint()
@@ -185,6 +187,7 @@ def sheet(video: Path, run_csv: Path, out_png: Path | None, cols: int, rows: int
     (r, degrees CCW), score. First and last rows of the run are always shown.
     Prints the PNG's path on stdout.
     """
+    require_stdout()  # for the PNG's path: checked before the PNG is written
     if rows is not None and count is not None:
         raise UsageError(f"--rows and --count contradict each other: --rows {rows} shows {cols} x {rows} frames, "
                          f"--count {count} shows {count} frames in {cols} columns; give one of them")

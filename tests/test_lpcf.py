@@ -583,6 +583,23 @@ def test_a_twin_far_away_is_not_taken_for_an_object_hidden_for_a_moment(seed):
     assert all(ok for ok, _ in results[-20:]) and centre_errors(results[-20:], poses[-20:]).max() < 1.0
 
 
+@pytest.mark.parametrize("seed", [0, 3])
+def test_an_object_hidden_while_moving_fast_is_found_where_it_went(seed):
+    """A textured ellipse crossing the frame at 20 px a frame (two thirds of its radius) is hidden for 8 frames:
+    the searches' reach grows with the speed it was tracked at, so it is found as soon as it shows, 200 px on, and
+    tracked to the end. (With a reach of a quarter semi-axis a frame alone, it was not found before it left.)"""
+    rng = np.random.default_rng(seed)
+    background = random_texture(480, 640, rng)
+    texture = random_texture(121, 121, rng)
+    roi = Ellipse(80.0, 240.0 + 40 * rng.uniform(-1, 1), 30.0, 24.0, 30.0 * seed)
+    poses = [Pose(roi.cx + 20.0 * i, roi.cy + 2.0 * i, 1.0, 0.3 * i) for i in range(25)]
+    frames = [background.copy() if 10 <= i < 18 else render_frame(background, texture, roi, p)
+              for i, p in enumerate(poses)]
+    _, results = run(frames, roi)
+    back = results[18 - 1:]
+    assert all(ok for ok, _ in back[2:]) and centre_errors(back[2:], poses[20:]).max() < 0.25 * roi.a
+
+
 def _leaves_and_comes_back_elsewhere(case):
     """Case ``case`` of 24 generated leave-and-return scenes: a textured ellipse (radius 25-45 px, tilted 0-180
     degrees, turning 0.3 degrees a frame) leaves by the right edge at 6-10 px a frame, stays out for 10 frames and

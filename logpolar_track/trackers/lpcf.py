@@ -478,6 +478,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self._lp_sample = None
         self._lp_references()
         self.velocity = np.zeros(2)  # pixels per frame
+        self._last_speed = 0.0  # of the last tracked frame, pixels per frame (see _within_reach)
         # Predicted change per frame (see _turn_and_zoom_after): degrees counter-clockwise, natural log of scale.
         self.spin_deg, self.zoom = 0.0, 0.0
         #: Running mean misses (pixels) of the prediction with the velocity and without it (see _prediction_gain).
@@ -690,6 +691,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         speed = float(np.hypot(*self.velocity))
         if speed > reach:
             self.velocity *= reach / speed
+        self._last_speed = min(speed, reach)
         self.match_level += self.level_rate * (match - self.match_level)
         # Not where the long-term model does not recognise the estimate: the short-term models would learn what
         # the object is no longer (the 13 starts: 0.4775 against 0.4744 learning regardless, prototype).
@@ -820,14 +822,16 @@ class LogPolarCorrelationTracker(SimilarityTracker):
 
     def _within_reach(self, centres: np.ndarray, last: Similarity, frames: int) -> np.ndarray:
         """Which of ``centres`` (pixels, ``(n, 2)``) an object last seen at ``last`` ``frames`` frames ago may have
-        reached: ``_SEARCH_REACH`` semi-axes (the larger, at ``last``'s scale) plus ``_SEARCH_REACH_PER_FRAME`` a
-        frame; anywhere if ``last`` is near the frame's edge (the object may have left the view and come back on
-        any side)."""
+        reached: ``_SEARCH_REACH`` semi-axes (the larger, at ``last``'s scale) plus, a frame,
+        ``_SEARCH_REACH_PER_FRAME`` semi-axes or ``_SEARCH_REACH_SPEED`` times the speed it was last tracked at,
+        whichever is more; anywhere if ``last`` is near the frame's edge (the object may have left the view and
+        come back on any side)."""
         width, height = self.frame_size
         semi_axis = max(self.roi.a, self.roi.b) * last.scale
         if min(last.cx, last.cy, width - 1 - last.cx, height - 1 - last.cy) < _SEARCH_REACH_EDGE * semi_axis:
             return np.ones(len(centres), bool)
-        reach = semi_axis * (_SEARCH_REACH + _SEARCH_REACH_PER_FRAME * frames)
+        per_frame = max(_SEARCH_REACH_PER_FRAME * semi_axis, _SEARCH_REACH_SPEED * self._last_speed)
+        reach = _SEARCH_REACH * semi_axis + per_frame * frames
         return np.hypot(centres[:, 0] - last.cx, centres[:, 1] - last.cy) <= reach
 
     def _long_term_search(self, frame, best: Similarity, psr: float, peak: float):
@@ -1652,15 +1656,18 @@ _SEARCH_POSE_PSR = 1.3
 #: loss a place far away is a look-alike, not the object, which cannot have gone far yet. Over the 13 starts of the
 #: 7 real sequences the re-detection had moved the estimate 17 times: the 10 moves in the first 5-14 frames of a
 #: loss (56-358 px) none onto the object, 6 of them off an estimate 2-49 px from it (human3's walker left for
-#: another pedestrian 245 px away); the 7 after 17-83 frames all onto it (within 3-21 px). With the reach: 14
-#: moves, 8 onto the object, 5 off it (the long-term search's: 41, 14 onto and 15 off -> 35, 14 and 13); mean IoU
-#: AUC over the 13 starts 0.4773 -> 0.4848 (human3 0.423 -> 0.454, freeman1 0.355 -> 0.370), from the box 0.5673
-#: -> 0.5909 (freeman1 0.307 -> 0.471), the others unchanged. A twin of the object 340 px away, found by the
-#: long-term search when the object was hidden for 12 frames, is left alone (3 of 4 generated runs went to the
-#: twin; with the reach for the re-detection alone too; without it for the long-term search the 13-start mean was
-#: 0.4868, freeman1 0.384). Other settings, with the reach for the re-detection alone: 3 + 1 a frame 0.4811;
-#: 2 + 0.25 or 1.5 + 0.5, 0.487 as 2 + 0.5; "near the edge" within 1 semi-axis the same, within 4, 0.4850.
-_SEARCH_REACH, _SEARCH_REACH_PER_FRAME, _SEARCH_REACH_EDGE = 2.0, 0.5, 2.0
+#: another pedestrian 245 px away); the 7 after 17-83 frames all onto it (within 3-21 px). With the reach: 10
+#: moves, 7 onto the object, 2 off it (the long-term search's: 41, 14 onto and 15 off -> 37, 15 and 12); mean IoU
+#: AUC over the 13 starts 0.4773 -> 0.4902 (human3 0.423 -> 0.486, freeman1 0.355 -> 0.376), from the box 0.5673
+#: -> 0.5909 (freeman1 0.307 -> 0.471), the others unchanged or nearly. A twin of the object 340 px away, found by
+#: the long-term search when the object was hidden for 12 frames, is left alone (before: 3 of 4 generated runs
+#: went to the twin). The reach grows by a quarter semi-axis a frame, or by 1.5 times the speed the object was last
+#: tracked at if more: with a quarter alone, an ellipse crossing at 20 px a frame (radius 30), hidden for 8
+#: frames, was not found again in 8 of 8 runs (half a semi-axis alone: 6 of 8; with the speed: found in all as it
+#: showed). Half a semi-axis with the speed: 13 starts 0.4854. Without the long-term search's reach (half a
+#: semi-axis alone) 0.4868 but the twin taken; 3 + 1 a frame 0.4811; "near the edge" at 4 semi-axes lost
+#: freeman1's box start (0.471 -> 0.307), at 1 the same as at 2.
+_SEARCH_REACH, _SEARCH_REACH_PER_FRAME, _SEARCH_REACH_SPEED, _SEARCH_REACH_EDGE = 2.0, 0.25, 1.5, 2.0
 #: Padded sizes whose kernel spectra a whole-frame search filter keeps, the least recently used dropped first. The
 #: long-term filter lives as long as the track, and a drifting scale gives each search new map sizes: kept without
 #: a bound, freeman1's 325 frames had left 32 sizes (56 MB) in it, and a part of a large frame takes about 10 MB.

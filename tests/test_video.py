@@ -354,3 +354,37 @@ def test_write_video_helper_writes_readable_clip(tmp_path):
     frames = [np.full((48, 64, 3), i * 10, np.uint8) for i in range(5)]
     path = write_video(tmp_path / "grey.avi", frames, 10.0)
     assert count_frames(path)[:2] == (5, (64, 48))
+
+
+def _turn_display_quarter_clockwise(path) -> None:
+    """Give an OpenCV-written .mp4 the display matrix of a phone held upright (its track header's rotation
+    of 90 degrees clockwise), as players and FFmpeg read it; the coded frames are left as they are."""
+    data = bytearray(path.read_bytes())
+    at = data.find(b"tkhd")
+    if at < 0 or data[at + 4] != 0:
+        pytest.skip("no version-0 track header in the written .mp4")
+    matrix = at + 4 + 4 + 20 + 8 + 8  # version/flags, times/id/duration, reserved, layer/group/volume/reserved
+    data[matrix:matrix + 36] = np.array([0, 1 << 16, 0, -(1 << 16), 0, 0, 0, 0, 1 << 30], ">i4").tobytes()
+    path.write_bytes(bytes(data))
+
+
+def test_a_phone_video_is_read_and_tracked_upright_as_players_show_it(tiny_video):
+    """A video with rotation metadata (phones record sideways and say how to turn it) is delivered turned, as
+    players and FFmpeg show it: ROI coordinates are read off the upright picture, and the track is in them."""
+    from logpolar_track.pipeline import track_video
+
+    coded = decode_all(tiny_video.path)
+    _turn_display_quarter_clockwise(tiny_video.path)
+    with VideoReader(tiny_video.path) as reader:
+        assert (reader.width, reader.height) == (120, 160)
+        frames = [frame for _, _, frame in reader]
+    assert all(np.array_equal(f, cv2.rotate(c, cv2.ROTATE_90_CLOCKWISE)) for f, c in zip(frames, coded))
+    height = coded[0].shape[0]
+    roi = tiny_video.roi
+    upright = [(height - 1 - p.cy, p.cx) for p in tiny_video.poses]  # (x, y) turned a quarter clockwise
+    results = list(track_video(tiny_video.path, f"{height - 1 - roi.cy:g},{roi.cx:g},{roi.a:g}"))
+    assert [r.status for r in results[1:]] == ["tracked"] * (len(results) - 1)
+    errors = [np.hypot(r.state.ellipse.cx - x, r.state.ellipse.cy - y) for r, (x, y) in zip(results, upright)]
+    assert max(errors) < 1.5
+    # Turning the picture keeps the sense of rotation: the object's turn is read as it is shown.
+    assert max(abs(r.state.rotation_deg - p.rotation_deg) for r, p in zip(results, tiny_video.poses)) < 2.0

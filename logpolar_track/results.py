@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import errno
 import io
 import json
 import math
@@ -201,13 +202,22 @@ def read_data_rows(path) -> tuple[list[str], list[tuple[int, list[str]]]]:
 @contextlib.contextmanager
 def stdout_errors():
     """Turn a failed write of rows to stdout (a full disk behind it) into an :class:`OutputError`; a closed
-    pipe (``| head``: BrokenPipeError) passes through for the caller to end quietly."""
+    pipe (``| head``: BrokenPipeError; see :func:`reader_left`) passes through as BrokenPipeError for the caller
+    to end quietly."""
     try:
         yield
     except BrokenPipeError:
         raise
     except OSError as exc:
+        if reader_left(exc):
+            raise BrokenPipeError(errno.EPIPE, "Broken pipe") from exc
         raise OutputError(f"cannot write the rows to stdout: {exc.strerror or exc}") from None
+
+
+def reader_left(exc: OSError) -> bool:
+    """Whether a failed write to stdout means its reader went away (``| head``): a BrokenPipeError, or on
+    Windows the EINVAL a write to a pipe whose reader closed it gives there."""
+    return isinstance(exc, BrokenPipeError) or (sys.platform == "win32" and exc.errno == errno.EINVAL)
 
 
 class CsvWriter:

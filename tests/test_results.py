@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import sys
 
 import pytest
 
@@ -117,3 +118,25 @@ def test_existing_csv_refused_unless_overwrite(tmp_path):
 def test_missing_folder(tmp_path):
     with pytest.raises(OutputError, match="does not exist"):
         CsvWriter(tmp_path / "nowhere" / "run.csv")
+
+
+@pytest.mark.parametrize("platform, ends_quietly", [("win32", True), ("linux", False)])
+def test_a_gone_reader_on_windows_ends_quietly_as_a_broken_pipe(monkeypatch, capsys, platform, ends_quietly):
+    """On Windows a write to a pipe whose reader left fails with EINVAL, not BrokenPipeError: it ends lptrack as
+    quietly (exit 141), both for rows (``run --csv -``) and for the other commands' stdout; elsewhere EINVAL is an
+    error like any other failed write."""
+    import errno
+
+    from logpolar_track.cli import EXIT_BROKEN_PIPE, stdout_failures
+    from logpolar_track.results import stdout_errors
+
+    monkeypatch.setattr(sys, "platform", platform)
+    invalid = OSError(errno.EINVAL, "Invalid argument")
+    with pytest.raises(BrokenPipeError if ends_quietly else OutputError):
+        with stdout_errors():
+            raise invalid
+    with pytest.raises(SystemExit if ends_quietly else OutputError) as raised:
+        with stdout_failures():
+            raise invalid
+    if ends_quietly:
+        assert raised.value.code == EXIT_BROKEN_PIPE

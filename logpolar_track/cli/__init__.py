@@ -28,6 +28,7 @@ import cv2  # noqa: E402
 from .. import __version__  # noqa: E402
 from ..errors import LptrackError, OutputError, RoiError, UsageError  # noqa: E402
 from ..geometry import ROI_SYNTAX, Ellipse, parse_roi  # noqa: E402
+from ..results import reader_left  # noqa: E402
 from ..video import keep_frames_off_the_heap  # noqa: E402
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -173,9 +174,9 @@ def stdout_failures():
     failed write (a full disk behind it) is an :class:`OutputError` (one line, exit 1)."""
     try:
         yield
-    except BrokenPipeError:
-        stdout_reader_left()
     except OSError as exc:
+        if reader_left(exc):
+            stdout_reader_left()
         _stdout_to_devnull()
         raise OutputError(f"cannot write to stdout: {exc.strerror or exc}") from None
 

@@ -634,12 +634,12 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         refined = Similarity(min(max(moved.cx, 0.0), width - 1.0), min(max(moved.cy, 0.0), height - 1.0),
                              moved.scale, moved.rotation_deg, match)
         self.cursor = refined
-        # Hysteresis: once dropped, a match must be back above a higher level to resume, not just above the drop
-        # level, and the filter must answer sharply there, or a lost estimate wandering on background, or the
-        # search, settles on a weak look-alike.
         # The margin is capped so that a large object is not at "the edge" everywhere in the frame.
         margin = min(_EXIT_MARGIN * min(self.roi.a, self.roi.b) * refined.scale, 0.25 * min(width, height))
         at_edge = min(refined.cx, refined.cy, width - 1 - refined.cx, height - 1 - refined.cy) < margin
+        # Hysteresis: once dropped, a match must be back above a higher level to resume, not just above the drop
+        # level, and the filter must answer sharply there, or a lost estimate wandering on background, or the
+        # search, settles on a weak look-alike.
         dropped = match < self.drop_ratio * self.match_level
         # At the edge the patch is partly beyond the frame, and an object coming back into view is soon wholly in
         # it: resume there only at a higher match (see _RESUME_AT_EDGE).

@@ -636,7 +636,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.cursor = refined
         # The margin is capped so that a large object is not at "the edge" everywhere in the frame.
         margin = min(_EXIT_MARGIN * min(self.roi.a, self.roi.b) * refined.scale, 0.25 * min(width, height))
-        at_edge = min(refined.cx, refined.cy, width - 1 - refined.cx, height - 1 - refined.cy) < margin
+        at_edge = self._edge_distance(refined.cx, refined.cy) < margin
         # Hysteresis: once dropped, a match must be back above a higher level to resume, not just above the drop
         # level, and the filter must answer sharply there, or a lost estimate wandering on background, or the
         # search, settles on a weak look-alike.
@@ -830,9 +830,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         ``_SEARCH_REACH_PER_FRAME`` semi-axes or ``_SEARCH_REACH_SPEED`` times the speed it was last tracked at,
         whichever is more; anywhere if ``last`` is near the frame's edge (the object may have left the view and
         come back on any side)."""
-        width, height = self.frame_size
         semi_axis = max(self.roi.a, self.roi.b) * last.scale
-        if min(last.cx, last.cy, width - 1 - last.cx, height - 1 - last.cy) < _SEARCH_REACH_EDGE * semi_axis:
+        if self._edge_distance(last.cx, last.cy) < _SEARCH_REACH_EDGE * semi_axis:
             return np.ones(len(centres), bool)
         per_frame = max(_SEARCH_REACH_PER_FRAME * semi_axis, _SEARCH_REACH_SPEED * self._last_speed)
         reach = _SEARCH_REACH * semi_axis + per_frame * frames
@@ -857,7 +856,6 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         kept = self._last_sample
         here = _peak_and_psr(self.spectra.correlate(self._long_term_parts, kept[2]))[3]
         cursor = self.cursor
-        width, height = self.frame_size
         part = self._search_part
         found, found_psr = None, max(_LONG_TERM_GAIN * here, self.psr_learn)
         for size in _LONG_TERM_SIZES:
@@ -873,7 +871,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
                 x, y = np.array([place.cx, place.cy]) + self._samples_to_pixels(dx, dy, place)
                 # Near the frame's edge a patch is partly the constant beyond it, whose straight edge the filter
                 # answered sharply (freeman1: the estimate moved to the frame's corner).
-                if place_psr > found_psr and min(x, y, width - 1 - x, height - 1 - y) >= margin:
+                if place_psr > found_psr and self._edge_distance(x, y) >= margin:
                     found = Similarity(float(x), float(y), pose.scale, pose.rotation_deg, pose.score)
                     found_psr = place_psr
         self._last_sample = kept
@@ -981,8 +979,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             return state, height
         log_scale = d_rho * self.grid.log_step
         rotation = d_theta * self.grid.degrees_per_bin
-        log_scale = float(np.clip(log_scale, -self.max_scale_step, self.max_scale_step))
-        rotation = float(np.clip(rotation, -self.max_rotation_step, self.max_rotation_step))
+        log_scale = min(max(log_scale, -self.max_scale_step), self.max_scale_step)
+        rotation = min(max(rotation, -self.max_rotation_step), self.max_rotation_step)
         self._lp_sample = image, log_scale / self.grid.log_step, rotation / self.grid.degrees_per_bin
         return Similarity(state.cx, state.cy, state.scale * math.exp(log_scale), state.rotation_deg + rotation,
                           state.score), height
@@ -1160,15 +1158,21 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         log-polar grid at ``state``: the ROI's axis ``a``, turned by the estimate's rotation."""
         return self._patch_angle + state.rotation_deg
 
+    def _edge_distance(self, x: float, y: float) -> float:
+        """Pixels from ``(x, y)`` to the frame's nearest edge (its outermost pixel centres); negative outside."""
+        width, height = self.frame_size
+        return min(x, y, width - 1 - x, height - 1 - y)
+
     def _samples_to_pixels(self, d_across: float, d_down: float, state: Similarity) -> np.ndarray:
         """A move of ``(d_across, d_down)`` samples along the patch's axes at ``state`` as ``(dx, dy)`` pixels on
         screen (y down)."""
-        return _rotate_screen(np.array([d_across, d_down]) * self.step * state.scale, self._axes_deg(state))
+        step, scale = self.step, state.scale
+        return _rotate_screen((d_across * step * scale, d_down * step * scale), self._axes_deg(state))
 
     def _pixels_to_samples(self, dx: float, dy: float, state: Similarity) -> np.ndarray:
         """The inverse of :meth:`_samples_to_pixels`: a move of ``(dx, dy)`` pixels on screen as ``(d_across,
         d_down)`` samples along the patch's axes at ``state``."""
-        return _rotate_screen(np.array([dx, dy]), -self._axes_deg(state)) / (self.step * state.scale)
+        return _rotate_screen((dx, dy), -self._axes_deg(state)) / (self.step * state.scale)
 
     def _patch_matrix(self, state: Similarity, size: tuple[int, int]) -> np.ndarray:
         """The affine map ``(2, 3)`` from samples of a patch of ``size`` ``(nx, ny)`` at ``state`` to frame pixels
@@ -1896,10 +1900,12 @@ def _dft_size(value: float) -> int:
     return down if value - down < up - value else up
 
 
-def _rotate_screen(vector: np.ndarray, angle_deg: float) -> np.ndarray:
+def _rotate_screen(vector, angle_deg: float) -> np.ndarray:
+    """``vector`` ``(x, y)`` (y down) turned ``angle_deg`` counter-clockwise on screen, as an array."""
+    x, y = float(vector[0]), float(vector[1])
     t = math.radians(angle_deg)
     c, s = math.cos(t), math.sin(t)
-    return np.array([vector[0] * c + vector[1] * s, -vector[0] * s + vector[1] * c])
+    return np.array([x * c + y * s, -x * s + y * c])
 
 
 def _peak_offset(response: np.ndarray) -> tuple[int, int, float, float, float]:

@@ -35,8 +35,8 @@ from .geometry import ROI_SYNTAX, Ellipse, parse_roi
 from .pipeline import CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, run_video
 from .results import FORMATS, header_line
 from .trackers import tracker_class
-from .video import (CODECS_BY_EXTENSION, announced_frame_count, frames_to_track, make_output_folder,
-                    remove_empty_folders, temporary_path)
+from .video import (CODECS_BY_EXTENSION, announced_frame_count, check_fps, frames_to_track, make_output_folder,
+                    remove_empty_folders, temporary_path, video_stem)
 
 #: File extensions searched for in input folders (case-insensitive).
 VIDEO_EXTENSIONS: tuple[str, ...] = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".ts",
@@ -92,6 +92,8 @@ class VideoJob:
     overwrite: bool = False
     stream: bool = False
     max_frames: int | None = None
+    #: Frames per second instead of the video's own (None: its own; see ``run_video``).
+    fps: float | None = None
     #: Keyword tuning of ``tracker`` (a dict: left out of the job's hash).
     tracker_params: Mapping[str, object] | None = field(default=None, hash=False)
 
@@ -394,8 +396,8 @@ class BatchPlan:
 def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entries: Iterable[RoiEntry] = (),
                tracker: str = DEFAULT_TRACKER, start_frame: int = 0, max_frames: int | None = None, out_dir=".",
                video: bool = True, stream: bool = False, data_format: str = "csv", overwrite: bool = False,
-               skip_existing: bool = False, tracker_params: Mapping[str, Mapping[str, object]] | None = None
-               ) -> BatchPlan:
+               skip_existing: bool = False, tracker_params: Mapping[str, Mapping[str, object]] | None = None,
+               fps: float | None = None) -> BatchPlan:
     """Give every video its ROI, start frame, tracker and outputs.
 
     Parameters
@@ -414,6 +416,8 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         (:func:`~logpolar_track.trackers.tracker_params_from_text` makes it from ``--param`` text).
     max_frames : int, optional
         Frames to track per video, the start frame included (None: to the end).
+    fps : float, optional
+        Frames per second of every video instead of its own (for image sequences, which have none).
     out_dir : path
         Outputs go to ``out_dir/<path relative to the input folder>/<stem>.lptrack.{mp4,csv}``; a file name
         shared by two inputs (``a.mp4`` and ``a.avi``) keeps its extension instead: ``a.mp4.lptrack.csv``.
@@ -426,21 +430,24 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         Replace existing outputs; or leave alone every video whose outputs all exist (status ``skipped``) and
         redo the others, replacing whatever part of their outputs exists.
     """
+    check_fps(fps)
     entries = {video_key(e.video): e for e in roi_entries}
     if not videos:
         videos = [VideoInput(e.video) for e in entries.values()]
     out_dir = Path(out_dir).resolve()
     relative = _relative_names(videos)
+    # What each input's outputs are named after, in its relative folder.
+    stems = [rel.with_name(video_stem(item.path)) for item, rel in zip(videos, relative)]
     by_stem: dict[Path, int] = {}
-    for rel in relative:
-        by_stem[rel.with_suffix("")] = by_stem.get(rel.with_suffix(""), 0) + 1
+    for stem in stems:
+        by_stem[stem] = by_stem.get(stem, 0) + 1
     jobs, order, settled = [], [], {}
     claimed: dict[Path, str] = {}
-    for item, rel in zip(videos, relative):
+    for item, rel, stem in zip(videos, relative, stems):
         label = str(item.path)
         order.append(label)
         # Two inputs sharing a stem in one folder keep their extension in the output names.
-        base = rel.with_suffix("") if by_stem[rel.with_suffix("")] == 1 else rel
+        base = stem if by_stem[stem] == 1 else rel
         folder = out_dir / base.parent
         video_out = folder / f"{base.name}{VIDEO_OUT_SUFFIX}" if video else None
         csv_out = None if stream else folder / f"{base.name}{_data_suffix(data_format)}"
@@ -449,7 +456,8 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         job = VideoJob(label=label, video=video_key(item.path), roi=entry.roi if entry else roi,
                        tracker=job_tracker, tracker_params=dict((tracker_params or {}).get(job_tracker) or {}),
                        start_frame=(entry.start_frame if entry and entry.start_frame is not None else start_frame),
-                       max_frames=max_frames, video_out=video_out, csv_out=csv_out, data_format=data_format,
+                       max_frames=max_frames, fps=fps, video_out=video_out, csv_out=csv_out,
+                       data_format=data_format,
                        # A partial set (a run killed between its two renames) is redone whole.
                        overwrite=overwrite or skip_existing, stream=stream)
         clash = next((claimed[p] for p in (video_out, csv_out) if p is not None and p in claimed), None)
@@ -484,7 +492,7 @@ def run_job(job: VideoJob, report: Callable[[int], None] | None = None) -> Video
     summary = run_video(job.video, job.roi, tracker=job.tracker, start_frame=job.start_frame,
                         max_frames=job.max_frames, video_out=job.video_out,
                         csv_out="-" if job.stream else job.csv_out, overwrite=job.overwrite, progress=progress,
-                        csv_options=csv_options, tracker_params=job.tracker_params)
+                        csv_options=csv_options, tracker_params=job.tracker_params, fps=job.fps)
     return VideoOutcome(job.label, "ok", frames=summary.frames, lost=summary.lost,
                         expected_frames=summary.expected_frames, seconds=summary.seconds,
                         truncated=summary.truncated,

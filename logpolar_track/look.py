@@ -41,7 +41,7 @@ from .evaluate import GroundTruthError, Track, read_data_file, rotation_errors, 
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
 from .results import COLUMNS, STATUSES, FrameResult
 from .trackers.base import TrackState
-from .video import VideoReader, check_output_path, temporary_path
+from .video import VideoReader, check_output_path, temporary_path, video_stem
 
 #: BGR colour of the grid lines drawn by :func:`draw_grid` (cyan: rare in natural images, legible on both
 #: dark and light backgrounds).
@@ -294,7 +294,7 @@ def write_png(path, image: np.ndarray, *, overwrite: bool = False, what: str = "
 
 def default_frame_png(video_path, index: int, folder=".") -> Path:
     """Default output of ``lptrack frame``: ``<video stem>.frame<index>.png`` in ``folder``."""
-    return Path(folder) / f"{Path(video_path).stem}.frame{int(index)}.png"
+    return Path(folder) / f"{video_stem(video_path)}.frame{int(index)}.png"
 
 
 def write_frame_png(video_path, out_png=None, *, index: int | None = None, time_s: float | None = None,

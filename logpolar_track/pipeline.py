@@ -23,7 +23,7 @@ from . import trackers as _trackers
 from .results import CsvWriter, FrameResult
 from .trackers import Tracker, create_tracker
 from .video import (CODECS_BY_EXTENSION, VideoReader, VideoWriter, check_output_path, frames_to_track,
-                    writes_in_place)
+                    is_image_sequence, video_stem, writes_in_place)
 
 #: Tracker used when none is named: the registry's choice (``trackers.DEFAULT_TRACKER``) when it makes one,
 #: else ``fixed``. Read from one place so the CLI, the docs and the library agree.
@@ -38,15 +38,19 @@ ProgressLike = Union[bool, Callable[[int, "int | None"], None], None]
 
 
 def default_outputs(video_path, folder=".") -> tuple[Path, Path]:
-    """Default ``(video_out, csv_out)`` for ``video_path``: ``<stem>.lptrack.mp4`` / ``.csv`` in ``folder``."""
-    stem = Path(video_path).stem
+    """Default ``(video_out, csv_out)`` for ``video_path``: ``<stem>.lptrack.mp4`` / ``.csv`` in ``folder``
+    (:func:`~logpolar_track.video.video_stem`: ``frame`` for an image sequence ``frame_%04d.png``)."""
+    stem = video_stem(video_path)
     folder = Path(folder)
     return folder / f"{stem}{VIDEO_OUT_SUFFIX}", folder / f"{stem}{CSV_OUT_SUFFIX}"
 
 
 def roi_sidecar_paths(video_path) -> list[Path]:
-    """Where an initial-ROI sidecar of ``video_path`` may be: ``<stem>.roi``, then ``<file name>.roi``."""
+    """Where an initial-ROI sidecar of ``video_path`` may be: ``<stem>.roi``, then ``<file name>.roi``; for an
+    image sequence, ``<stem>.roi`` in its folder (``frame.roi`` for ``frame_%04d.png``)."""
     video_path = Path(video_path)
+    if is_image_sequence(video_path):
+        return [video_path.with_name(video_stem(video_path) + ".roi")]
     return [video_path.with_suffix(".roi"), video_path.with_name(video_path.name + ".roi")]
 
 
@@ -127,7 +131,8 @@ def _track(reader: VideoReader, roi: Ellipse, tracker: Tracker,
 
 
 def track_video(path, roi: RoiLike = None, tracker: str | Tracker = DEFAULT_TRACKER, *, start_frame: int = 0,
-                max_frames: int | None = None, tracker_params: dict | None = None) -> Iterator[FrameResult]:
+                max_frames: int | None = None, tracker_params: dict | None = None,
+                fps: float | None = None) -> Iterator[FrameResult]:
     """Track one object through a video; yields one :class:`FrameResult` per frame, the first with status
     ``init``.
 
@@ -148,6 +153,9 @@ def track_video(path, roi: RoiLike = None, tracker: str | Tracker = DEFAULT_TRAC
         Stop after this many frames (the start frame included); None: to the end of the video.
     tracker_params : dict, optional
         Keyword tuning parameters for a tracker given by name.
+    fps : float, optional
+        Frames per second for ``time_s`` instead of the video's own rate (an image sequence has none: 25 is
+        assumed), as FFmpeg's ``-framerate``.
 
     Raises
     ------
@@ -165,7 +173,7 @@ def track_video(path, roi: RoiLike = None, tracker: str | Tracker = DEFAULT_TRAC
     """
     engine = _make_tracker(tracker, tracker_params)
     _check_max_frames(max_frames)
-    with VideoReader(path, start_frame=start_frame) as reader:
+    with VideoReader(path, start_frame=start_frame, fps=fps) as reader:
         for _, result in _track(reader, _resolve_roi(roi, path), engine, max_frames):
             yield result
 
@@ -283,13 +291,14 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
 def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRACKER, start_frame: int = 0,
               max_frames: int | None = None, video_out=None, csv_out=None, overwrite: bool = False,
               progress: ProgressLike = False, tracker_params: dict | None = None,
-              csv_options: dict | None = None, threads: int | None = TRACKING_OPENCV_THREADS) -> RunSummary:
+              csv_options: dict | None = None, threads: int | None = TRACKING_OPENCV_THREADS,
+              fps: float | None = None) -> RunSummary:
     """Track one object through ``path`` and write the annotated video and/or the per-frame CSV.
 
     Parameters
     ----------
-    path, roi, tracker, start_frame, max_frames, tracker_params
-        As in :func:`track_video`.
+    path, roi, tracker, start_frame, max_frames, tracker_params, fps
+        As in :func:`track_video`; ``fps`` is also the annotated video's rate.
     video_out : str or Path, optional
         Annotated video to write (same size, frame count and frame rate as the input); None for none.
     csv_out : str or Path, optional
@@ -324,7 +333,7 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
     _check_max_frames(max_frames)
     tracker_name = engine.name or type(engine).__name__
     video_path = Path(path)
-    with VideoReader(video_path, start_frame=start_frame) as reader:
+    with VideoReader(video_path, start_frame=start_frame, fps=fps) as reader:
         ellipse = _resolve_roi(roi, video_path)
         check_roi_fits(ellipse, reader.width, reader.height, source=video_path.name)
         # Inputs are checked (above) before outputs, outputs before any frame is tracked or written.

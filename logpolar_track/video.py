@@ -8,6 +8,11 @@ leaves a file that looks finished.
 
 Frames are BGR ``uint8`` arrays of shape ``(height, width, 3)`` as OpenCV decodes them. Frame indexes count
 from 0 at the first frame of the file; ``time_s = index / fps`` (the nominal time of a constant-rate video).
+
+An image sequence is read like a video where a file name holds a printf-style frame number, as FFmpeg and
+``cv2.VideoCapture`` take it: ``frames/%04d.png`` is ``frames/0001.png``, ``frames/0002.png``, ... Its frames are
+its images in number order, whatever the first number (FFmpeg and OpenCV look only for 0 to 4), frame 0 the
+lowest; it has no frame rate of its own (``fps_guessed``).
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 import ctypes  # noqa: E402
 import ctypes.util  # noqa: E402
 import queue  # noqa: E402
+import re  # noqa: E402
 import threading  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Iterator  # noqa: E402
@@ -30,7 +36,7 @@ from typing import Iterator  # noqa: E402
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .errors import FrameRangeError, OutputError, VideoError, counted  # noqa: E402
+from .errors import FrameRangeError, OutputError, UsageError, VideoError, counted  # noqa: E402
 
 #: Frame rate assumed when a container reports none (0 or NaN), in frames per second.
 FALLBACK_FPS = 25.0
@@ -49,10 +55,92 @@ CODECS_BY_EXTENSION: dict[str, tuple[tuple[str, str], ...]] = {
 _END = object()  # end-of-stream marker in the read-ahead queue
 
 
+#: A printf-style frame number in a file name: ``%d``, ``%04d``.
+_FRAME_NUMBER = re.compile(r"%0?\d*d")
+
+
+def _frame_number_field(path: Path) -> re.Match | None:
+    """The frame-number field of an image-sequence pattern ``path`` (a file name with exactly one such field that
+    is not itself an existing file), else None."""
+    fields = list(_FRAME_NUMBER.finditer(path.name))
+    if len(fields) != 1 or path.exists():
+        return None
+    return fields[0]
+
+
+def is_image_sequence(path) -> bool:
+    """Whether ``path`` names an image sequence (``frames/%04d.png``) rather than a video file."""
+    return _frame_number_field(Path(path)) is not None
+
+
+def image_sequence_files(path) -> list[Path]:
+    """The images of image-sequence pattern ``path``, in frame-number order: the files of its folder whose
+    names are the pattern with a number in the field, written as the field writes it (``%04d``: ``0007``,
+    ``12345``; ``%d``: ``7``). A number missing from the run is skipped. Empty if none (or no folder)."""
+    path = Path(path)
+    field = _frame_number_field(path)
+    if field is None:
+        raise ValueError(f"'{path}' is not an image-sequence pattern")
+    name = path.name
+    named = re.compile(re.escape(name[:field.start()]) + r"(\d+)" + re.escape(name[field.end():]) + r"\Z")
+    folder = path.parent
+    found = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return []
+    for entry in entries:
+        match = named.match(entry.name)
+        # The number as the field writes it, so that '%04d' does not also take '7.png' or '00007.png'.
+        if match and field.group(0) % int(match.group(1)) == match.group(1) and entry.is_file():
+            found.append((int(match.group(1)), folder / entry.name))
+    return [file for _, file in sorted(found)]
+
+
+#: Image files whose numbered runs :func:`guess_image_sequence` recognises in a folder.
+IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm")
+
+
+def guess_image_sequence(folder) -> Path | None:
+    """The image-sequence pattern of the first numbered image in ``folder`` (by name), its last run of digits
+    as the frame number (``shots/frame_0100.png`` -> ``shots/frame_%04d.png``), or None if it has none: what to
+    suggest to someone who gave the folder itself."""
+    folder = Path(folder)
+    try:
+        names = sorted(entry.name for entry in os.scandir(folder) if entry.is_file())
+    except OSError:
+        return None
+    for name in names:
+        if Path(name).suffix.lower() in IMAGE_EXTENSIONS:
+            digits = list(re.finditer(r"\d+", Path(name).stem))
+            if digits:
+                run = digits[-1]
+                field = "%d" if len(run.group(0)) == 1 else f"%0{len(run.group(0))}d"
+                return folder / (name[:run.start()] + field + name[run.end():])
+    return None
+
+
+def video_stem(path) -> str:
+    """What the outputs and the ``.roi`` sidecar of input ``path`` are named after: a video's stem (``clip`` for
+    ``clip.mp4``); for an image sequence, its file name without the frame number and the extension, trimmed of
+    separators (``frame`` for ``frame_%04d.png``), or its folder's name if nothing is left (``img`` for
+    ``img/%04d.jpg``)."""
+    path = Path(path)
+    field = _frame_number_field(path)
+    if field is None:
+        return path.stem
+    rest = path.name[:field.start()] + path.name[field.end():]
+    stem = rest[:len(rest) - len(path.suffix)].strip(" ._-")
+    return stem or path.absolute().parent.name or "frames"
+
+
 def _check_input_path(path: Path) -> None:
+    if _frame_number_field(path) is not None:
+        _check_image_sequence(path)
+        return
     if not path.exists():
         raise VideoError(f"video '{path}' not found; give the path of a video file OpenCV can read "
-                         f"(e.g. .mp4, .avi, .mov)")
+                         f"(e.g. .mp4, .avi, .mov) or an image sequence's pattern (e.g. frames/%04d.png)")
     if path.is_dir():
         raise VideoError(f"'{path}' is a folder, not a video file")
     if not os.access(path, os.R_OK):
@@ -61,9 +149,58 @@ def _check_input_path(path: Path) -> None:
         raise VideoError(f"video '{path}' is empty (0 bytes); it contains no frames")
 
 
+def _check_image_sequence(path: Path) -> None:
+    field = _frame_number_field(path)
+    folder = path.parent
+    if not folder.is_dir():
+        raise VideoError(f"image sequence '{path}': folder '{folder}' not found")
+    if not image_sequence_files(path):
+        example = path.name[:field.start()] + field.group(0) % 1 + path.name[field.end():]
+        raise VideoError(f"no images match '{path}': {field.group(0)} stands for the frame number, e.g. "
+                         f"'{folder / example}'")
+
+
 def _open_capture(path: Path) -> cv2.VideoCapture:
-    """OpenCV's capture for ``path`` (one seam, so tests can stand in for odd containers)."""
+    """OpenCV's capture for ``path``, or an :class:`_ImageSequenceCapture` for an image-sequence pattern (one
+    seam, so tests can stand in for odd containers)."""
+    if is_image_sequence(path):
+        return _ImageSequenceCapture(image_sequence_files(path))
     return cv2.VideoCapture(str(path))
+
+
+class _ImageSequenceCapture:
+    """What :class:`VideoReader` uses of ``cv2.VideoCapture``, over the files of an image sequence: each read with
+    ``cv2.imread`` as BGR ``uint8`` (grey images made BGR, 16-bit ones reduced to 8 bits, as FFmpeg decodes
+    them). It reports the image count as its frame count and no frame rate."""
+
+    def __init__(self, files: list[Path]):
+        self._files = list(files)
+        self._next = 0
+
+    def isOpened(self) -> bool:  # noqa: N802 - cv2.VideoCapture's name
+        return bool(self._files)
+
+    def get(self, prop: int) -> float:
+        return float(len(self._files)) if prop == cv2.CAP_PROP_FRAME_COUNT else 0.0
+
+    def grab(self) -> bool:
+        if self._next >= len(self._files):
+            return False
+        self._next += 1
+        return True
+
+    def read(self) -> tuple[bool, np.ndarray | None]:
+        if not self.grab():
+            return False, None
+        file = self._files[self._next - 1]
+        frame = cv2.imread(str(file), cv2.IMREAD_COLOR)
+        if frame is None:
+            raise VideoError(f"cannot read '{file}' as an image (not an image, damaged, or a format OpenCV "
+                             f"cannot read)")
+        return True, frame
+
+    def release(self) -> None:
+        self._files = []
 
 
 def announced_frame_count(path) -> int:
@@ -75,6 +212,12 @@ def announced_frame_count(path) -> int:
     finally:
         capture.release()
     return int(count) if math.isfinite(count) and count > 0 else 0
+
+
+def check_fps(fps: float | None) -> None:
+    """Refuse a frame rate that is given but not a positive finite number (frames per second)."""
+    if fps is not None and not (math.isfinite(fps) and fps > 0):
+        raise UsageError(f"the frame rate must be a positive number of frames per second, got {fps:g}")
 
 
 def frames_to_track(frame_count: int, start_frame: int, max_frames: int | None) -> int | None:
@@ -92,7 +235,8 @@ class VideoReader:
     Parameters
     ----------
     path : str or Path
-        Video file; anything OpenCV's FFmpeg backend decodes.
+        Video file, anything OpenCV's FFmpeg backend decodes; or an image sequence's pattern
+        (:func:`is_image_sequence`: ``frames/%04d.png``).
     start_frame : int, optional
         Index of the first frame to deliver (0 = first frame of the file). Earlier frames are decoded and
         dropped, which is exact where container seeking is not.
@@ -100,13 +244,16 @@ class VideoReader:
         How many frames the background thread may decode ahead of the one the caller holds, the one being
         decoded included: at most ``1 + read_ahead`` frames are alive at once (25 MB each at 4K). With 1, the
         next frame is decoded while the caller works on the current one.
+    fps : float, optional
+        Frames per second to use instead of the container's (which an image sequence does not have), as
+        FFmpeg's ``-framerate``; must be positive and finite.
 
     Attributes
     ----------
     path : Path
     fps : float
-        Frames per second as the container reports it, never rounded; :data:`FALLBACK_FPS` if it reports
-        0 or NaN (then ``fps_guessed`` is True).
+        Frames per second as given, or as the container reports it, never rounded; :data:`FALLBACK_FPS` if it
+        reports 0 or NaN (then ``fps_guessed`` is True).
     fps_guessed : bool
     frame_count : int
         Frame count the container reports; may be approximate, and 0 when unknown.
@@ -124,10 +271,11 @@ class VideoReader:
     A reader can be iterated once.
     """
 
-    def __init__(self, path, *, start_frame: int = 0, read_ahead: int = 1):
+    def __init__(self, path, *, start_frame: int = 0, read_ahead: int = 1, fps: float | None = None):
         self.path = Path(path)
         if start_frame < 0:
             raise VideoError(f"start frame must be >= 0, got {start_frame}")
+        check_fps(fps)
         self.start_frame = int(start_frame)
         self._read_ahead = max(1, int(read_ahead))
         _check_input_path(self.path)
@@ -139,9 +287,10 @@ class VideoReader:
         if _fourcc(self._cap) == "ansi":  # FFmpeg renders any text file as a video of its characters
             self._cap.release()
             raise VideoError(f"cannot read '{self.path}' as a video: it is a text file")
-        fps = float(self._cap.get(cv2.CAP_PROP_FPS) or 0.0)
+        if fps is None:
+            fps = float(self._cap.get(cv2.CAP_PROP_FPS) or 0.0)
         self.fps_guessed = not (math.isfinite(fps) and fps > 0)
-        self.fps = FALLBACK_FPS if self.fps_guessed else fps
+        self.fps = FALLBACK_FPS if self.fps_guessed else float(fps)
         count = self._cap.get(cv2.CAP_PROP_FRAME_COUNT)
         self.frame_count = int(count) if math.isfinite(count) and count > 0 else 0
         # Skip to the start frame by decoding: exact, unlike CAP_PROP_POS_FRAMES on inter-coded streams.

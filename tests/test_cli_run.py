@@ -645,3 +645,81 @@ def test_run_video_tracks_with_one_opencv_thread_and_restores_the_setting(tiny_v
     tracker = ThreadsSeen()
     run_video(tiny_video.path, "80,60,20", tracker=tracker, csv_out=tmp_path / "u.csv", threads=None)
     assert set(tracker.seen) == {before}
+
+
+# -- image sequences --------------------------------------------------------------------------------------------
+@pytest.fixture
+def image_sequence(tiny_video, tmp_path):
+    """``tiny_video``'s frames as ``shots/frame_0001.png`` ... (numbered from 1, as OTB's are): its pattern."""
+    folder = tmp_path / "shots"
+    folder.mkdir()
+    for number, frame in enumerate(tiny_video.frames, start=1):
+        cv2.imwrite(str(folder / f"frame_{number:04d}.png"), frame)
+    return folder / "frame_%04d.png"
+
+
+def test_an_image_sequence_runs_like_a_video(tiny_video, image_sequence, workdir):
+    result = invoke(image_sequence, "--roi", "80,60,20")
+    assert result.exit_code == 0, result.stderr
+    # Named after the pattern without its number; no frame rate of its own, so 25 fps is assumed, and said.
+    assert listing(workdir) == ["frame.lptrack.csv", "frame.lptrack.mp4"]
+    assert (f"lptrack: warning: '{image_sequence}' reports no frame rate; assumed 25 fps for time_s and the "
+            f"output video") in result.stderr
+    rows = read_rows((workdir / "frame.lptrack.csv").read_text())
+    assert [int(r["frame"]) for r in rows] == list(range(tiny_video.n_frames))  # frame 0 is frame_0001.png
+    assert float(rows[-1]["time_s"]) == pytest.approx(19 / 25.0, abs=1e-6)
+    assert {r["status"] for r in rows[1:]} == {"tracked"}
+    assert np.median(centre_errors(rows, tiny_video.poses)) < 1.0
+    assert count_frames(workdir / "frame.lptrack.mp4")[:2] == (tiny_video.n_frames, tiny_video.size)
+
+
+def test_an_image_sequence_reads_its_roi_sidecar_and_goes_through_a_batch(tiny_video, image_sequence, workdir):
+    image_sequence.with_name("frame.roi").write_text("80,60,20\n")
+    result = invoke(image_sequence, tiny_video.path, "--no-video", "--out-dir", "tracks", "-q")
+    assert result.exit_code == 0, result.stderr
+    assert sorted(p.name for p in (workdir / "tracks").rglob("*.csv")) == ["frame.lptrack.csv", "tiny.lptrack.csv"]
+    rows = read_rows(next((workdir / "tracks").rglob("frame.lptrack.csv")).read_text())
+    assert len(rows) == tiny_video.n_frames and (rows[0]["cx"], rows[0]["a"]) == ("80.000", "20.000")
+
+
+def test_a_folder_of_images_given_as_the_video_is_told_its_pattern(image_sequence, workdir):
+    result = invoke(image_sequence.parent, "--roi", "80,60,20")
+    assert result.exit_code == 2
+    assert result.stderr == (f"lptrack: error: no videos found in '{image_sequence.parent}' (folders are searched "
+                             f"for .mp4, .m4v, .mov, .avi, .mkv, ... files; for an image sequence give its "
+                             f"images' pattern, e.g. '{image_sequence}')\n")
+    assert listing(workdir) == []
+
+
+def test_a_pattern_that_matches_no_image_is_one_line(image_sequence, workdir):
+    result = invoke(image_sequence.with_name("frame_%03d.png"), "--roi", "80,60,20")
+    assert result.exit_code == 1
+    assert result.stderr == (f"lptrack: error: no images match '{image_sequence.with_name('frame_%03d.png')}': "
+                             f"%03d stands for the frame number, e.g. '{image_sequence.with_name('frame_001.png')}'\n")
+    assert listing(workdir) == []
+
+
+def test_fps_sets_the_rate_of_an_image_sequence_and_overrides_a_videos(tiny_video, image_sequence, workdir):
+    result = invoke(image_sequence, "--roi", "80,60,20", "--fps", "12.5")
+    assert result.exit_code == 0, result.stderr
+    assert "warning" not in result.stderr  # the rate was given: nothing was assumed
+    rows = read_rows((workdir / "frame.lptrack.csv").read_text())
+    assert [float(r["time_s"]) for r in rows] == pytest.approx([i / 12.5 for i in range(tiny_video.n_frames)])
+    assert count_frames(workdir / "frame.lptrack.mp4")[2] == pytest.approx(12.5, abs=0.01)
+    # A video's own rate (30) gives way too, in one process and in a batch.
+    result = invoke(tiny_video.path, "--fps", "10", "--no-video", "--csv", "-", "-q")
+    assert float(read_rows(result.stdout)[-1]["time_s"]) == pytest.approx(1.9)
+    result = invoke(tiny_video.path, image_sequence, "--roi", "80,60,20", "--fps", "10", "--no-video", "--csv", "-",
+                    "-q")
+    assert result.exit_code == 0, result.stderr
+    assert [float(r["time_s"]) for r in read_rows(result.stdout) if r["frame"] == "19"] == pytest.approx([1.9, 1.9])
+
+
+@pytest.mark.parametrize("rate", ["0", "-5", "nan", "inf"])
+def test_a_frame_rate_that_is_not_a_positive_number_is_refused(tiny_video, image_sequence, workdir, rate):
+    for inputs in ((image_sequence,), (image_sequence, tiny_video.path)):
+        result = invoke(*inputs, "--roi", "80,60,20", "--fps", rate)
+        assert result.exit_code == 2
+        assert result.stderr == (f"lptrack: error: the frame rate must be a positive number of frames per second, "
+                                 f"got {float(rate):g}\n")
+        assert listing(workdir) == []

@@ -388,3 +388,78 @@ def test_a_phone_video_is_read_and_tracked_upright_as_players_show_it(tiny_video
     assert max(errors) < 1.5
     # Turning the picture keeps the sense of rotation: the object's turn is read as it is shown.
     assert max(abs(r.state.rotation_deg - p.rotation_deg) for r, p in zip(results, tiny_video.poses)) < 2.0
+
+
+# -- image sequences ------------------------------------------------------------------------------------------
+def _numbered_images(folder, numbers, pattern="frame_%04d.png", size=(48, 64)):
+    """Images whose every pixel is their position in ``numbers`` times 10 (grey level), one per number."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for position, number in enumerate(numbers):
+        cv2.imwrite(str(folder / (pattern % number)), np.full(size + (3,), 10 * position, np.uint8))
+    return folder / pattern
+
+
+def test_an_image_sequence_is_read_in_number_order_whatever_its_first_number(tmp_path):
+    # FFmpeg and OpenCV look for a first number of 0 to 4 only; 100 is where a cut of a longer sequence starts.
+    pattern = _numbered_images(tmp_path / "shots", [100, 101, 102, 110, 1000, 12345])
+    for stranger in ("frame_0103.jpg", "frame_00104.png", "frame_7.png", "other_0105.png", "frame_0106.png.bak"):
+        (tmp_path / "shots" / stranger).write_bytes(b"not one of the sequence's images")
+    assert video_module.is_image_sequence(pattern)
+    with VideoReader(pattern) as reader:
+        assert (reader.width, reader.height, reader.frame_count) == (64, 48, 6)
+        assert reader.fps_guessed and reader.fps == FALLBACK_FPS  # an image sequence has no frame rate
+        got = [(index, time_s, int(frame[0, 0, 0]), frame.shape, frame.dtype) for index, time_s, frame in reader]
+    # Gaps in the numbers (103-109) are skipped, not an end; %04d takes 12345, which it writes so.
+    assert got == [(i, i / FALLBACK_FPS, 10 * i, (48, 64, 3), np.uint8) for i in range(6)]
+    with VideoReader(pattern, start_frame=4) as reader:
+        assert [(index, int(frame[0, 0, 0])) for index, _, frame in reader] == [(4, 40), (5, 50)]
+
+
+def test_grey_and_16_bit_images_are_read_as_8_bit_bgr(tmp_path):
+    folder = tmp_path / "shots"
+    folder.mkdir()
+    cv2.imwrite(str(folder / "1.png"), np.full((20, 30), 200, np.uint8))
+    cv2.imwrite(str(folder / "2.png"), np.full((20, 30), 100 * 257, np.uint16))
+    with VideoReader(folder / "%d.png") as reader:
+        frames = [frame for _, _, frame in reader]
+    assert [(f.shape, f.dtype, int(f[0, 0, 0])) for f in frames] == [((20, 30, 3), np.uint8, 200),
+                                                                        ((20, 30, 3), np.uint8, 100)]
+
+
+def test_image_sequence_errors_say_what_is_wrong(tmp_path):
+    with pytest.raises(VideoError, match=r"image sequence '.*nope/f_%04d.png': folder '.*nope' not found"):
+        VideoReader(tmp_path / "nope" / "f_%04d.png")
+    pattern = _numbered_images(tmp_path / "shots", [1, 2, 3])
+    with pytest.raises(VideoError, match=r"no images match '.*f_%03d.png': %03d stands for the frame number, "
+                                         r"e.g. '.*shots/f_001.png'"):
+        VideoReader(pattern.with_name("f_%03d.png"))
+    (tmp_path / "shots" / "frame_0002.png").write_bytes(b"damaged")
+    with VideoReader(pattern) as reader:
+        frames = iter(reader)
+        next(frames)
+        with pytest.raises(VideoError, match=r"failed after frame 0: cannot read '.*frame_0002.png' as an image"):
+            next(frames)
+
+
+def test_a_video_file_with_a_percent_in_its_name_is_a_video(make_video, tmp_path):
+    clip = make_video(tmp_path, "clip_%d.mp4")
+    assert not video_module.is_image_sequence(clip.path)
+    with VideoReader(clip.path) as reader:
+        assert sum(1 for _ in reader) == clip.n_frames
+    assert video_module.video_stem(clip.path) == "clip_%d"
+
+
+@pytest.mark.parametrize("name, stem", [("clip.mp4", "clip"), ("shots/frame_%04d.png", "frame"),
+                                        ("img/%04d.jpg", "img"), ("take 2 - %d.tif", "take 2"),
+                                        ("%05d_left.png", "left")])
+def test_outputs_of_an_image_sequence_are_named_after_its_name_without_the_number(tmp_path, name, stem):
+    assert video_module.video_stem(tmp_path / name) == stem
+
+
+def test_a_folder_of_images_suggests_its_pattern(tmp_path):
+    _numbered_images(tmp_path / "shots", [7, 8], pattern="cam1_%05d.jpg")
+    (tmp_path / "shots" / "notes.txt").write_text("a")
+    assert video_module.guess_image_sequence(tmp_path / "shots") == tmp_path / "shots" / "cam1_%05d.jpg"
+    (tmp_path / "plain").mkdir()
+    (tmp_path / "plain" / "logo.png").write_bytes(b"x")
+    assert video_module.guess_image_sequence(tmp_path / "plain") is None

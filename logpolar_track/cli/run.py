@@ -24,7 +24,7 @@ from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, defau
                         run_video)
 from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
-from ..video import make_output_folder, remove_empty_folders
+from ..video import check_fps, guess_image_sequence, make_output_folder, remove_empty_folders
 from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, check_jobs_or_scheduler, main, parse_param_options,
                parse_roi_option, stdout_reader_left)
 
@@ -104,6 +104,7 @@ Examples:
   lptrack run clip.mp4 --roi 320,240,60,30,15 --tracker diffdecomp
   lptrack run clip.mp4 --roi 320,240,40 --param learning_rate=0.05
   lptrack run clip.mp4 --roi 320,240,40 --no-video --csv - > track.csv
+  lptrack run 'shots/frame_%04d.png' --fps 30 --roi 320,240,40   # image sequence
   lptrack run footage/ --roi-file rois.csv --out-dir tracks --jobs 4
   find footage -name '*.mp4' | lptrack run - --roi-file rois.csv --no-video --csv - > all.csv
 """
@@ -124,6 +125,9 @@ Examples:
               help="Frame index (0 = first) the ROI refers to; tracking starts there.")
 @click.option("--frames", "max_frames", type=click.IntRange(min=1), default=None, metavar="N",
               help="Track N frames (the start frame included), then stop. Default: to the end of the video.")
+@click.option("--fps", type=float, default=None, metavar="RATE",
+              help="Frames per second of the input, for time_s and the annotated video, as FFmpeg's -framerate: "
+                   "an image sequence's (it has none: 25 is assumed), or instead of a video's own.")
 @click.option("--out", "-o", "video_out", type=click.Path(dir_okay=False, path_type=Path), metavar="VIDEO_OUT",
               help=f"Annotated video to write (one input only). Default: <video stem>{VIDEO_OUT_SUFFIX}. "
                    f"Extension .mp4/.m4v/.mov (mp4v), .avi (MJPG), .mkv or .webm; falls back to MJPG .avi.")
@@ -148,10 +152,13 @@ Examples:
                    "pip install 'dask[distributed]' and the files at the same paths on the workers.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary on stderr (failures still).")
 def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tracker: str,
-        params: tuple[str, ...], start_frame: int, max_frames: int | None, video_out: Path | None,
-        csv_out: str | None, out_dir: Path | None, data_format: str, no_video: bool, overwrite: bool,
-        skip_existing: bool, jobs: int | None, scheduler: str | None, quiet: bool) -> None:
+        params: tuple[str, ...], start_frame: int, max_frames: int | None, fps: float | None,
+        video_out: Path | None, csv_out: str | None, out_dir: Path | None, data_format: str, no_video: bool,
+        overwrite: bool, skip_existing: bool, jobs: int | None, scheduler: str | None, quiet: bool) -> None:
     """Track the object inside a circle or ellipse through VIDEO (or many).
+
+    VIDEO is a video file, or an image sequence named as FFmpeg takes it
+    (frame_%04d.png: frame_0001.png, frame_0002.png, ...).
 
     Writes an annotated copy of the video (the tracked outline, a radius line
     that turns with the object, a readout of frame, scale, rotation and score;
@@ -167,6 +174,7 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     if overwrite and skip_existing:
         raise UsageError("--overwrite and --skip-existing contradict each other; give one of them")
     check_jobs_or_scheduler(jobs is not None, scheduler)
+    check_fps(fps)
     if not videos and roi_file is None:
         raise UsageError("give a VIDEO (a file, a folder, or '-' for paths on stdin), or --roi-file "
                          "(see 'lptrack run --help')")
@@ -177,7 +185,7 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
         tuning = parse_param_options(params, [tracker])[tracker]
         _check_out_dir(out_dir, video_out=video_out, csv_out=csv_out, no_video=no_video, quiet=quiet)
         _run_one(Path(videos[0]), roi, tracker=tracker, tuning=tuning, start_frame=start_frame, max_frames=max_frames,
-                 video_out=video_out, csv_out=csv_out, out_dir=out_dir, data_format=data_format,
+                 fps=fps, video_out=video_out, csv_out=csv_out, out_dir=out_dir, data_format=data_format,
                  no_video=no_video, overwrite=overwrite, skip_existing=skip_existing, quiet=quiet)
         return
     many = "with --scheduler" if scheduler is not None and len(videos) == 1 else "with several videos"
@@ -203,12 +211,15 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
 
     inputs = find_videos(videos, on_duplicate=named_again)
     if videos and not inputs:
-        searched = any(v != "-" and Path(v).is_dir() for v in videos)
-        raise UsageError(f"no videos found in {', '.join('stdin' if v == '-' else repr(v) for v in videos)}" +
-                         (f" (folders are searched for {', '.join(VIDEO_EXTENSIONS[:5])}, ... files)" if searched
-                          else ""))
+        folders = [Path(v) for v in videos if v != "-" and Path(v).is_dir()]
+        why = ""
+        if folders:
+            why = f" (folders are searched for {', '.join(VIDEO_EXTENSIONS[:5])}, ... files"
+            pattern = next(filter(None, map(guess_image_sequence, folders)), None)
+            why += f"; for an image sequence give its images' pattern, e.g. '{pattern}')" if pattern else ")"
+        raise UsageError(f"no videos found in {', '.join('stdin' if v == '-' else repr(v) for v in videos)}{why}")
     plan = plan_batch(inputs, roi=roi, roi_entries=entries, tracker=tracker, start_frame=start_frame,
-                      max_frames=max_frames, out_dir=out_dir or ".", video=not no_video, stream=stream,
+                      max_frames=max_frames, fps=fps, out_dir=out_dir or ".", video=not no_video, stream=stream,
                       data_format=data_format, overwrite=overwrite, skip_existing=skip_existing)
     if params:
         # Checked against the trackers of the videos that will run, so that a parameter none of them takes is
@@ -260,21 +271,21 @@ def _reader_left(stream) -> bool:
 
 
 def _run_one(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, max_frames: int | None,
-             video_out: Path | None, csv_out: str | None, out_dir: Path | None, data_format: str, no_video: bool,
-             overwrite: bool, skip_existing: bool, quiet: bool) -> None:
+             fps: float | None, video_out: Path | None, csv_out: str | None, out_dir: Path | None, data_format: str,
+             no_video: bool, overwrite: bool, skip_existing: bool, quiet: bool) -> None:
     """One video in this process, errors raised as they are (exit 1 or 2)."""
     created = make_output_folder(out_dir) if out_dir is not None else []
     try:
         _run_one_into(video, roi, tracker=tracker, tuning=tuning, start_frame=start_frame, max_frames=max_frames,
-                      video_out=video_out, csv_out=csv_out, out_dir=out_dir, data_format=data_format,
+                      fps=fps, video_out=video_out, csv_out=csv_out, out_dir=out_dir, data_format=data_format,
                       no_video=no_video, overwrite=overwrite, skip_existing=skip_existing, quiet=quiet)
     finally:
         remove_empty_folders(created)  # a run that failed or was stopped leaves no folder made for it
 
 
 def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, max_frames: int | None,
-                  video_out: Path | None, csv_out: str | None, out_dir: Path | None, data_format: str,
-                  no_video: bool, overwrite: bool, skip_existing: bool, quiet: bool) -> None:
+                  fps: float | None, video_out: Path | None, csv_out: str | None, out_dir: Path | None,
+                  data_format: str, no_video: bool, overwrite: bool, skip_existing: bool, quiet: bool) -> None:
     default_video, default_csv = default_outputs(video, out_dir or ".")
     if not no_video and video_out is None:
         video_out = default_video
@@ -292,7 +303,7 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
                             video_out=None if no_video else video_out, csv_out=csv_out,
                             overwrite=overwrite or skip_existing,
                             progress=show and sys.stderr.isatty(), csv_options={"data_format": data_format},
-                            tracker_params=tuning)
+                            tracker_params=tuning, fps=fps)
     except BrokenPipeError:
         stdout_reader_left()
     if csv_out == "-" and _reader_left(sys.stdout):

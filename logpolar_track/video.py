@@ -171,11 +171,13 @@ def _open_capture(path: Path) -> cv2.VideoCapture:
 class _ImageSequenceCapture:
     """What :class:`VideoReader` uses of ``cv2.VideoCapture``, over the files of an image sequence: each read with
     ``cv2.imread`` as BGR ``uint8`` (grey images made BGR, 16-bit ones reduced to 8 bits, as FFmpeg decodes
-    them). It reports the image count as its frame count and no frame rate."""
+    them). It reports the image count as its frame count and no frame rate. Every image must have the first
+    one's size, as a video's frames do."""
 
     def __init__(self, files: list[Path]):
         self._files = list(files)
         self._next = 0
+        self._size: tuple[int, int] | None = None  # (width, height) of the first image read
 
     def isOpened(self) -> bool:  # noqa: N802 - cv2.VideoCapture's name
         return bool(self._files)
@@ -197,6 +199,12 @@ class _ImageSequenceCapture:
         if frame is None:
             raise VideoError(f"cannot read '{file}' as an image (not an image, damaged, or a format OpenCV "
                              f"cannot read)")
+        size = frame.shape[1], frame.shape[0]
+        if self._size is None:
+            self._size = size
+        elif size != self._size:
+            raise VideoError(f"image '{file}' is {size[0]}x{size[1]} pixels, not {self._size[0]}x{self._size[1]} "
+                             f"as the sequence's first: every image of a sequence must have one size")
         return True, frame
 
     def release(self) -> None:

@@ -439,6 +439,13 @@ def test_image_sequence_errors_say_what_is_wrong(tmp_path):
         next(frames)
         with pytest.raises(VideoError, match=r"failed after frame 0: cannot read '.*frame_0002.png' as an image"):
             next(frames)
+    cv2.imwrite(str(tmp_path / "shots" / "frame_0002.png"), np.zeros((10, 20, 3), np.uint8))
+    with VideoReader(pattern) as reader:
+        frames = iter(reader)
+        next(frames)
+        with pytest.raises(VideoError, match=r"failed after frame 0: image '.*frame_0002.png' is 20x10 pixels, not "
+                                             r"64x48 as the sequence's first"):
+            next(frames)
 
 
 def test_a_video_file_with_a_percent_in_its_name_is_a_video(make_video, tmp_path):

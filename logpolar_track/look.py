@@ -102,18 +102,20 @@ def count_frames(path) -> int:
         return sum(1 for _ in reader)
 
 
-def read_frame(path, index: int | None = None, *, time_s: float | None = None) -> Frame:
+def read_frame(path, index: int | None = None, *, time_s: float | None = None, fps: float | None = None) -> Frame:
     """Exactly the ``index``-th decoded frame of a video (or the frame shown at ``time_s`` seconds).
 
     Parameters
     ----------
     path : str or Path
-        Video file.
+        Video file, or an image sequence's pattern (``frames/%04d.png``).
     index : int, optional
         Frame index, 0 = first frame of the file. Default 0.
     time_s : float, optional
         Instead of ``index``: time in seconds; the frame is ``round(time_s * fps)``, or the last frame for a
         time within its time on screen (before ``frame count / fps``).
+    fps : float, optional
+        Frames per second instead of the video's own (an image sequence has none), as ``lptrack run --fps``.
 
     Returns
     -------
@@ -139,25 +141,25 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None) -
     if time_s is not None:
         if not (math.isfinite(time_s) and time_s >= 0):
             raise UsageError(f"time must be a number of seconds >= 0, got {time_s}")
-        with VideoReader(path) as reader:
+        with VideoReader(path, fps=fps) as reader:
             fps = reader.fps
         index = int(round(time_s * fps))
     index = 0 if index is None else int(index)
     if index < 0:
         raise UsageError(f"frame index must be >= 0, got {index}")
     try:
-        reader = VideoReader(path, start_frame=index, read_ahead=1)
+        reader = VideoReader(path, start_frame=index, read_ahead=1, fps=fps)
     except VideoError:
         if index == 0:
             raise
         n = count_frames(path)  # raises the video's own error if it is unreadable
         if index < n:  # the video became unreadable half-way: say so rather than blame the index
             raise
-        with VideoReader(path) as reader:
+        with VideoReader(path, fps=fps) as reader:
             fps = reader.fps
         if time_s is not None and n and time_s < n / fps:
             # Within the last frame's time on screen, rounded up past it: that frame is the one shown.
-            return read_frame(path, n - 1)
+            return read_frame(path, n - 1, fps=fps)
         asked = f"frame {index}" if time_s is None else f"time {time_s:g} s (frame {index} at {fps:g} fps)"
         raise FrameRangeError(f"{asked} lies past the end of '{path}', which has {counted(n, 'frame')}: give a "
                               f"frame from 0 to {n - 1} (or a time before {n / fps:.3f} s)") from None
@@ -298,7 +300,8 @@ def default_frame_png(video_path, index: int, folder=".") -> Path:
 
 
 def write_frame_png(video_path, out_png=None, *, index: int | None = None, time_s: float | None = None,
-                    grid: int = 50, roi: Ellipse | None = None, overwrite: bool = False) -> Path:
+                    grid: int = 50, roi: Ellipse | None = None, overwrite: bool = False,
+                    fps: float | None = None) -> Path:
     """What ``lptrack frame`` does: frame ``index`` (or at ``time_s``) with a grid and an optional ROI, as PNG.
 
     Parameters
@@ -306,7 +309,7 @@ def write_frame_png(video_path, out_png=None, *, index: int | None = None, time_
     video_path : str or Path
     out_png : str or Path, optional
         Default :func:`default_frame_png` in the current folder.
-    index, time_s
+    index, time_s, fps
         See :func:`read_frame`.
     grid : int
         Grid step in pixels (0: none).
@@ -319,7 +322,7 @@ def write_frame_png(video_path, out_png=None, *, index: int | None = None, time_
     Path
         The PNG written; same width and height as the frame.
     """
-    frame = read_frame(video_path, index, time_s=time_s)
+    frame = read_frame(video_path, index, time_s=time_s, fps=fps)
     out_png = default_frame_png(video_path, frame.index) if out_png is None else Path(out_png)
     check_image_suffix(out_png, (".png",), "output image")
     check_output_path(out_png, overwrite=overwrite, what="output image")

@@ -465,3 +465,18 @@ def test_plot_without_matplotlib_gives_the_install_hint(tiny_run, tmp_path, monk
     line = one_error_line(invoke("plot", run_csv, "-o", tmp_path / "p.png"), 2)
     assert "pip install matplotlib" in line
     assert not (tmp_path / "p.png").exists()
+
+
+def test_frame_command_on_an_image_sequence_takes_its_rate_from_fps(tiny_video, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "shots").mkdir()
+    for number, image in enumerate(tiny_video.frames, start=1):
+        cv2.imwrite(str(tmp_path / "shots" / f"frame_{number:04d}.png"), image)
+    pattern = Path("shots") / "frame_%04d.png"
+    result = invoke("frame", pattern, "--time", 0.5, "--fps", 10, "--grid", 0)
+    assert result.exit_code == 0, result.stderr
+    assert result.stdout.strip() == "frame.frame5.png"  # named after the pattern; 0.5 s at 10 fps: frame 5
+    assert np.array_equal(cv2.imread("frame.frame5.png")[:96], tiny_video.frames[5][:96])
+    assert "25 fps" in one_error_line(invoke("frame", pattern, "--time", 1.0), 2)  # 25 assumed without --fps
+    assert one_error_line(invoke("frame", pattern, "--fps", 0), 2) == \
+        "lptrack: error: the frame rate must be a positive number of frames per second, got 0"

@@ -42,9 +42,12 @@ Examples:
               help="Grid line spacing in pixels; 0 for no grid.")
 @click.option("--roi", "roi_spec", metavar="SPEC",
               help="Draw this candidate ROI: 'cx,cy,r' or 'cx,cy,a,b,angle' (pixels; degrees CCW).")
+@click.option("--fps", type=float, default=None, metavar="RATE",
+              help="Frames per second for --time instead of the video's own, as 'lptrack run --fps' (an image "
+                   "sequence has none: 25 is assumed).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing PNG.")
 def frame(video: Path, index: int | None, time_s: float | None, out_png: Path | None, grid: int,
-          roi_spec: str | None, overwrite: bool) -> None:
+          roi_spec: str | None, fps: float | None, overwrite: bool) -> None:
     """Write one frame of VIDEO as a PNG with a labelled pixel grid.
 
     The PNG has the frame's own size, so any image viewer's cursor position
@@ -57,7 +60,8 @@ def frame(video: Path, index: int | None, time_s: float | None, out_png: Path | 
     if index is not None and time_s is not None:
         raise UsageError("--at and --time contradict each other; give one of them")
     roi = parse_roi_option(roi_spec) if roi_spec is not None else None
-    path = write_frame_png(video, out_png, index=index, time_s=time_s, grid=grid, roi=roi, overwrite=overwrite)
+    path = write_frame_png(video, out_png, index=index, time_s=time_s, grid=grid, roi=roi, overwrite=overwrite,
+                           fps=fps)
     write_stdout(str(path) + "\n")
 
 

@@ -142,8 +142,8 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None, f
         if not (math.isfinite(time_s) and time_s >= 0):
             raise UsageError(f"time must be a number of seconds >= 0, got {time_s}")
         with VideoReader(path, fps=fps) as reader:
-            fps = reader.fps
-        index = int(round(time_s * fps))
+            rate = reader.fps
+        index = int(round(time_s * rate))
     index = 0 if index is None else int(index)
     if index < 0:
         raise UsageError(f"frame index must be >= 0, got {index}")
@@ -156,13 +156,13 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None, f
         if index < n:  # the video became unreadable half-way: say so rather than blame the index
             raise
         with VideoReader(path, fps=fps) as reader:
-            fps = reader.fps
-        if time_s is not None and n and time_s < n / fps:
+            rate = reader.fps
+        if time_s is not None and n and time_s < n / rate:
             # Within the last frame's time on screen, rounded up past it: that frame is the one shown.
             return read_frame(path, n - 1, fps=fps)
-        asked = f"frame {index}" if time_s is None else f"time {time_s:g} s (frame {index} at {fps:g} fps)"
+        asked = f"frame {index}" if time_s is None else f"time {time_s:g} s (frame {index} at {rate:g} fps)"
         raise FrameRangeError(f"{asked} lies past the end of '{path}', which has {counted(n, 'frame')}: give a "
-                              f"frame from 0 to {n - 1} (or a time before {n / fps:.3f} s)") from None
+                              f"frame from 0 to {n - 1} (or a time before {n / rate:.3f} s)") from None
     with reader:
         return Frame(reader.first_frame.copy(), index, reader.time_of(index), reader.fps, reader.fps_guessed,
                      path)

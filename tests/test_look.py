@@ -478,5 +478,7 @@ def test_frame_command_on_an_image_sequence_takes_its_rate_from_fps(tiny_video, 
     assert result.stdout.strip() == "frame.frame5.png"  # named after the pattern; 0.5 s at 10 fps: frame 5
     assert np.array_equal(cv2.imread("frame.frame5.png")[:96], tiny_video.frames[5][:96])
     assert "25 fps" in one_error_line(invoke("frame", pattern, "--time", 1.0), 2)  # 25 assumed without --fps
+    assert (read_frame(pattern, time_s=0.5).fps_guessed, read_frame(pattern, time_s=0.5, fps=10).fps_guessed) == \
+        (True, False)
     assert one_error_line(invoke("frame", pattern, "--fps", 0), 2) == \
         "lptrack: error: the frame rate must be a positive number of frames per second, got 0"

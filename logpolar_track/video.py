@@ -136,7 +136,9 @@ def video_stem(path) -> str:
 
 def _check_input_path(path: Path) -> None:
     if _frame_number_field(path) is not None:
-        _check_image_sequence(path)
+        # Whether any image matches is found when _open_capture lists the folder (once: it may be large).
+        if not path.parent.is_dir():
+            raise VideoError(f"image sequence '{path}': folder '{path.parent}' not found")
         return
     if not path.exists():
         raise VideoError(f"video '{path}' not found; give the path of a video file OpenCV can read "
@@ -149,15 +151,15 @@ def _check_input_path(path: Path) -> None:
         raise VideoError(f"video '{path}' is empty (0 bytes); it contains no frames")
 
 
-def _check_image_sequence(path: Path) -> None:
+def _not_opened(path: Path) -> VideoError:
+    """Why ``path``'s capture did not open (:func:`_open_capture`)."""
     field = _frame_number_field(path)
-    folder = path.parent
-    if not folder.is_dir():
-        raise VideoError(f"image sequence '{path}': folder '{folder}' not found")
-    if not image_sequence_files(path):
+    if field is not None:  # an image sequence opens unless no image matches
         example = path.name[:field.start()] + field.group(0) % 1 + path.name[field.end():]
-        raise VideoError(f"no images match '{path}': {field.group(0)} stands for the frame number, e.g. "
-                         f"'{folder / example}'")
+        return VideoError(f"no images match '{path}': {field.group(0)} stands for the frame number, e.g. "
+                          f"'{path.parent / example}'")
+    return VideoError(f"cannot read '{path}' as a video: OpenCV cannot decode it (not a video, a damaged or "
+                      f"truncated file, or a format this OpenCV build does not support)")
 
 
 def _open_capture(path: Path) -> cv2.VideoCapture:
@@ -290,8 +292,7 @@ class VideoReader:
         self._cap = _open_capture(self.path)
         if not self._cap.isOpened():
             self._cap.release()
-            raise VideoError(f"cannot read '{self.path}' as a video: OpenCV cannot decode it (not a video, a "
-                             f"damaged or truncated file, or a format this OpenCV build does not support)")
+            raise _not_opened(self.path)
         if _fourcc(self._cap) == "ansi":  # FFmpeg renders any text file as a video of its characters
             self._cap.release()
             raise VideoError(f"cannot read '{self.path}' as a video: it is a text file")

@@ -41,7 +41,7 @@ from .evaluate import GroundTruthError, Track, read_data_file, rotation_errors, 
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
 from .results import COLUMNS, STATUSES, FrameResult
 from .trackers.base import TrackState
-from .video import VideoReader, check_output_path, temporary_path, video_stem
+from .video import VideoReader, check_output_path, guess_image_sequence, temporary_path, video_stem
 
 #: BGR colour of the grid lines drawn by :func:`draw_grid` (cyan: rare in natural images, legible on both
 #: dark and light backgrounds).
@@ -627,8 +627,10 @@ def _video_search(csv_path, folders: Sequence) -> tuple[str, list[tuple[Path, li
         if key in seen:
             continue
         seen.add(key)
-        searched.append((folder, [folder / f"{stem}{ext}" for ext in VIDEO_EXTENSIONS
-                                  if (folder / f"{stem}{ext}").is_file()]))
+        found = [folder / f"{stem}{ext}" for ext in VIDEO_EXTENSIONS if (folder / f"{stem}{ext}").is_file()]
+        # 'lptrack run img/%04d.jpg' names its CSV after the folder, img.lptrack.csv (OTB's layout).
+        sequence = guess_image_sequence(folder / stem) if (folder / stem).is_dir() else None
+        searched.append((folder, found + ([sequence] if sequence is not None else [])))
     return stem, searched
 
 
@@ -637,8 +639,9 @@ def find_video_for_csv(csv_path, folders: Sequence = (".",)) -> Path | None:
 
     A run CSV does not name its video. ``<stem>.lptrack.csv`` (``lptrack run``'s default name; or
     ``<stem>.lptrack.jsonl``) or ``<stem>.csv`` is matched with ``<stem>`` plus one of
-    :data:`VIDEO_EXTENSIONS` in the CSV's folder, then in ``folders``; the first folder with exactly one such
-    file wins. Annotated outputs (``*.lptrack.*``) are never chosen. :func:`describe_video_search` says why
+    :data:`VIDEO_EXTENSIONS`, or with a folder ``<stem>`` of numbered images (as an image-sequence pattern,
+    ``img/%04d.jpg`` for ``img.lptrack.csv``), in the CSV's folder, then in ``folders``; the first folder with
+    exactly one such source wins. Annotated outputs (``*.lptrack.*``) are never chosen. :func:`describe_video_search` says why
     none was found.
     """
     for _, found in _video_search(csv_path, folders)[1]:
@@ -659,9 +662,10 @@ def describe_video_search(csv_path, folders: Sequence = (".",)) -> str:
     several = [(folder, found) for folder, found in searched if len(found) > 1]
     if several:
         folder, found = several[0]
-        return f"{place(folder)} holds several videos it could be ({', '.join(p.name for p in found)})"
+        return f"{place(folder)} holds several videos it could be ({', '.join(str(p.relative_to(folder)) for p in found)})"
     others = ", ".join(VIDEO_EXTENSIONS[1:])
-    return f"no {stem}{VIDEO_EXTENSIONS[0]} (or {others}) in {' or '.join(place(f) for f, _ in searched)}"
+    return (f"no {stem}{VIDEO_EXTENSIONS[0]} (or {others}, or a folder {stem}/ of numbered images) in "
+            f"{' or '.join(place(f) for f, _ in searched)}")
 
 
 # ----------------------------------------------------------------------------------------------------------

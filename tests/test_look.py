@@ -428,6 +428,24 @@ def test_plot_finds_the_video_next_to_a_default_named_csv(tiny_run, tmp_path, mo
     assert png_size(folder / "tiny.lptrack.plot.png") == PLOT_SIZE
 
 
+def test_the_source_of_an_image_sequence_run_is_its_folder_of_the_csvs_name(tiny_run, tmp_path):
+    # 'lptrack run img/%04d.jpg' (OTB's layout) writes img.lptrack.csv beside img/.
+    _, run_csv, _ = tiny_run
+    (tmp_path / "img").mkdir()
+    for i in (1, 2, 3):
+        cv2.imwrite(str(tmp_path / "img" / f"{i:04d}.png"), np.full((8, 8, 3), 40 * i, np.uint8))
+    (tmp_path / "img" / "notes.txt").write_text("not an image")
+    (tmp_path / "img.lptrack.csv").write_text(run_csv.read_text())
+    found = find_video_for_csv(tmp_path / "img.lptrack.csv", folders=())
+    assert found == tmp_path / "img" / "%04d.png"
+    assert read_frame(found, 2).image[0, 0, 0] == 120
+    # A folder of that name without numbered images is no source.
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "cover.png").write_bytes((tmp_path / "img" / "0001.png").read_bytes())
+    (tmp_path / "other.lptrack.csv").write_text(run_csv.read_text())
+    assert find_video_for_csv(tmp_path / "other.lptrack.csv", folders=()) is None
+
+
 @needs_matplotlib
 def test_plot_says_where_it_looked_when_it_finds_no_video(tiny_run, tmp_path, monkeypatch):
     _, run_csv, _ = tiny_run
@@ -436,7 +454,8 @@ def test_plot_says_where_it_looked_when_it_finds_no_video(tiny_run, tmp_path, mo
     monkeypatch.chdir(tmp_path)
     result = invoke("plot", "runs/tiny.lptrack.csv", "-o", "p.png")
     assert result.exit_code == 0 and result.stdout == "p.png\n"
-    assert result.stderr == ("lptrack: note: no thumbnail: no tiny.mp4 (or .avi, .mov, .mkv, .m4v, .webm) in 'runs' "
+    assert result.stderr == ("lptrack: note: no thumbnail: no tiny.mp4 (or .avi, .mov, .mkv, .m4v, .webm, or a folder "
+                             "tiny/ of numbered images) in 'runs' "
                              "or the current folder; give the tracked video with --video VIDEO (or --no-video for "
                              "blank axes)\n")
     (tmp_path / "tiny.mp4").write_bytes(b"")

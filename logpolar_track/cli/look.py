@@ -109,11 +109,11 @@ def roi(video: Path, index: int, box: str | None, points: str | None, round_tol:
 
 @main.command("plot", cls=OneLineErrors, epilog="""\b
 The run CSV does not name its video: the thumbnail comes from --video, or
-from <stem>.mp4 (.avi, .mov, .mkv, .m4v, .webm) when exactly one such file
-sits next to the CSV (or in the current folder), where <stem> is the CSV's
-name without .lptrack.csv (.lptrack.jsonl, .csv). A note on stderr says
-which video was taken, or where none was found. --no-video draws the path
-on blank axes.
+from <stem>.mp4 (.avi, .mov, .mkv, .m4v, .webm), or a folder <stem>/ of
+numbered images, when exactly one such source sits next to the CSV (or in
+the current folder), where <stem> is the CSV's name without .lptrack.csv
+(.lptrack.jsonl, .csv). A note on stderr says which video was taken, or
+where none was found. --no-video draws the path on blank axes.
 
 \b
 Examples:

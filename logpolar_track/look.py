@@ -641,8 +641,8 @@ def find_video_for_csv(csv_path, folders: Sequence = (".",)) -> Path | None:
     ``<stem>.lptrack.jsonl``) or ``<stem>.csv`` is matched with ``<stem>`` plus one of
     :data:`VIDEO_EXTENSIONS`, or with a folder ``<stem>`` of numbered images (as an image-sequence pattern,
     ``img/%04d.jpg`` for ``img.lptrack.csv``), in the CSV's folder, then in ``folders``; the first folder with
-    exactly one such source wins. Annotated outputs (``*.lptrack.*``) are never chosen. :func:`describe_video_search` says why
-    none was found.
+    exactly one such source wins. Annotated outputs (``*.lptrack.*``) are never chosen.
+    :func:`describe_video_search` says why none was found.
     """
     for _, found in _video_search(csv_path, folders)[1]:
         if len(found) == 1:
@@ -662,7 +662,8 @@ def describe_video_search(csv_path, folders: Sequence = (".",)) -> str:
     several = [(folder, found) for folder, found in searched if len(found) > 1]
     if several:
         folder, found = several[0]
-        return f"{place(folder)} holds several videos it could be ({', '.join(str(p.relative_to(folder)) for p in found)})"
+        names = ", ".join(str(p.relative_to(folder)) for p in found)  # img/%04d.jpg for a sequence
+        return f"{place(folder)} holds several videos it could be ({names})"
     others = ", ".join(VIDEO_EXTENSIONS[1:])
     return (f"no {stem}{VIDEO_EXTENSIONS[0]} (or {others}, or a folder {stem}/ of numbered images) in "
             f"{' or '.join(place(f) for f, _ in searched)}")

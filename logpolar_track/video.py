@@ -685,6 +685,7 @@ class VideoWriter:
             if not self._temp.exists() or self._temp.stat().st_size == 0:
                 raise OutputError(f"cannot write video '{self.path}': the {self.fourcc} encoder produced "
                                   f"no data")
+            self._check_readable()
             os.replace(self._temp, self.path)
         except OSError as exc:
             self._temp.unlink(missing_ok=True)
@@ -693,6 +694,31 @@ class VideoWriter:
             self._temp.unlink(missing_ok=True)
             raise
         return self.path
+
+    def _check_readable(self) -> None:
+        """Raise :class:`OutputError` unless the finished temporary file opens as a video whose last frame can be
+        read.
+
+        OpenCV's writer reports no failed write: a disk that fills up mid-run leaves an MP4 without its index
+        ("moov atom not found") or an AVI whose header says it holds no frames (FFmpeg still seeks in it, to
+        what is there), which must not be renamed into place as if finished. A file cut short elsewhere fails to
+        seek to its last frame. Costs one seek and one frame's decoding.
+        """
+        with _fd2_silenced():
+            capture = cv2.VideoCapture(str(self._temp))
+            try:
+                opened = capture.isOpened()
+                count = int(capture.get(cv2.CAP_PROP_FRAME_COUNT)) if opened else 0
+                last = opened and capture.set(cv2.CAP_PROP_POS_FRAMES, self.frames_written - 1) and capture.grab()
+            finally:
+                capture.release()
+        # One frame less than written is allowed in the count, which a container may estimate from the duration.
+        short = count < self.frames_written - 1
+        if not (last and not short):
+            read = (f"holds {max(count, 0)} frames by its header" if opened and short
+                    else "cannot be read to its last frame" if opened else "cannot be read back")
+            raise OutputError(f"cannot write video '{self.path}': the finished file {read}, of the "
+                              f"{self.frames_written} written (is the disk full?)")
 
     def abort(self) -> None:
         """Stop writing and delete the temporary file; nothing is left behind. Safe to call more than once."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gc
+import os
 import signal
 import threading
 import time
@@ -298,6 +299,39 @@ def test_writer_encoder_failure_is_reported_and_leaves_nothing(tiny_video, tmp_p
             writer.write(frame)
         writer.close()
     writer.abort()
+    assert list(tmp_path.glob("out*")) == [] and list(tmp_path.glob(".out*")) == []
+
+
+@pytest.mark.parametrize("name", ["out.mp4", "out.avi"])
+def test_a_video_cut_short_by_a_full_disk_is_an_error_and_leaves_nothing(tiny_video, tmp_path, monkeypatch, name):
+    """OpenCV's writer reports no failed write: a disk that fills up leaves the file as far as it got, an MP4
+    without its index or an AVI that holds no frame by its header (seen on a 200 KB tmpfs, exit 0 and the broken
+    file renamed into place). The finished file is read back before it is renamed."""
+    real_writer = cv2.VideoWriter
+
+    class DiskFillsUp:  # the file ends where the disk filled: at half of what was written
+        def __init__(self, path, *args):
+            self.path, self.real = path, real_writer(path, *args)
+
+        def isOpened(self):
+            return self.real.isOpened()
+
+        def write(self, frame):
+            self.real.write(frame)
+
+        def release(self):
+            self.real.release()
+            with open(self.path, "r+b") as f:
+                f.truncate(os.path.getsize(self.path) // 2)
+
+    monkeypatch.setattr(video_module.cv2, "VideoWriter", DiskFillsUp)
+    writer = VideoWriter(tmp_path / name, 30.0)
+    for frame in tiny_video.frames:
+        writer.write(frame)
+    with pytest.raises(OutputError, match=r"the finished file (cannot be read back|cannot be read to its last frame|holds \d+ "
+                                          r"frames by its header), of the "
+                                          r"\d+ written \(is the disk full\?\)"):
+        writer.close()
     assert list(tmp_path.glob("out*")) == [] and list(tmp_path.glob(".out*")) == []
 
 

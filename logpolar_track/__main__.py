@@ -15,6 +15,10 @@ EXIT_INTERRUPTED = 130
 
 def main() -> int:
     """Run ``lptrack``; a Ctrl-C before the CLI can handle it ends with its one line and exit code 130."""
+    if sys.stderr is None:
+        # Started with stderr closed (``2>&-``): Python has no sys.stderr then. Messages and progress have nowhere
+        # to go and are dropped, as ``-q`` would; the work itself goes on.
+        sys.stderr = open(os.devnull, "w")
     try:
         from .cli import main as cli_main
 

@@ -452,6 +452,16 @@ def test_console_script_csv_dash_is_clean(tiny_video, workdir):
     assert listing(workdir) == []
 
 
+def test_a_run_with_stderr_closed_does_its_work_in_silence(tiny_video, workdir):
+    """``2>&-`` leaves Python without sys.stderr: the run failed with exit 1 and no word (an AttributeError on
+    ``isatty``). It tracks and writes its outputs as with ``-q``."""
+    proc = subprocess.run([sys.executable, "-m", "logpolar_track", "run", str(tiny_video.path), "--no-video"],
+                          stdout=subprocess.PIPE, text=True, timeout=120, cwd=workdir,
+                          preexec_fn=lambda: os.close(2))
+    assert proc.returncode == 0 and proc.stdout == ""
+    assert listing(workdir) == [f"{tiny_video.path.stem}.lptrack.csv"]
+
+
 def test_ctrl_c_while_the_console_script_imports_is_quiet(tmp_path):
     # Ctrl-C in the first few tenths of a second lands in the imports of numpy and OpenCV. Made certain here: the
     # import of numpy is interrupted. Exit 130 with the one line, not a KeyboardInterrupt traceback.

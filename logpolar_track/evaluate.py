@@ -99,7 +99,9 @@ def box_iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     inter = np.clip(iw, 0, None) * np.clip(ih, 0, None)
     union = a[:, 2] * a[:, 3] + b[:, 2] * b[:, 3] - inter
     with np.errstate(invalid="ignore", divide="ignore"):
-        iou = np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)
+        # At most 1: equal boxes can come out a rounding error above it, which a success curve's last threshold
+        # (IoU > 1) would count.
+        iou = np.where(union > 0, np.minimum(inter / np.where(union > 0, union, 1.0), 1.0), 0.0)
     iou[np.isnan(a).any(axis=1) | np.isnan(b).any(axis=1)] = np.nan
     return iou
 

@@ -23,6 +23,14 @@ def test_box_iou_hand_computed():
     np.testing.assert_allclose(box_iou(a, b), [1 / 3, 0.0, 1.0, 0.25])
 
 
+def test_a_box_overlaps_itself_at_one_exactly():
+    # Its own area, subtracted from twice itself, came out a rounding error over it: IoU 1.0000000000009, which a
+    # success curve's last threshold counts, so a perfect track scored 1.0 or 20/21 as rounding fell.
+    box = np.array([497.1, 497.1, 0.1, 0.1])
+    assert box_iou(box, box)[0] == 1.0
+    assert auc(success_curve(box_iou(np.tile(box, (5, 1)), np.tile(box, (5, 1))))) == pytest.approx(20 / 21)
+
+
 def test_box_iou_nan_rows_are_nan():
     out = box_iou([[0, 0, 2, 2], [np.nan] * 4], [[0, 0, 2, 2], [0, 0, 1, 1]])
     assert out[0] == 1.0 and math.isnan(out[1])

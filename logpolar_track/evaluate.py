@@ -55,6 +55,7 @@ import numpy as np
 
 from .errors import LptrackError
 from .geometry import Ellipse, ellipse_in_rotated_rect
+from .results import STATUSES
 
 #: IoU thresholds of the OTB success plot.
 IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
@@ -501,9 +502,9 @@ def read_data_file(path, what: str, hint: str = "") -> tuple[list[str], list[tup
         raise GroundTruthError(f"{what} '{path}': {exc}" + (f"; {hint}" if hint else "")) from None
 
 
-def _read_csv_columns(path, required: tuple[str, ...], what: str) -> tuple[list[dict], list[str]]:
-    """Rows (as ``{column: text}``) and header of a data file (:func:`read_data_file`) with the ``required``
-    columns."""
+def _read_csv_columns(path, required: tuple[str, ...], what: str) -> tuple[list[dict], list[str], list[int]]:
+    """Rows (as ``{column: text}``), header and the rows' line numbers in the file, of a data file
+    (:func:`read_data_file`) with the ``required`` columns."""
     path = Path(path)
     header, body = read_data_file(path, what)
     missing = [c for c in required if c not in header]
@@ -511,7 +512,8 @@ def _read_csv_columns(path, required: tuple[str, ...], what: str) -> tuple[list[
         raise GroundTruthError(f"{what} '{path}' lacks column(s) {', '.join(missing)}; expected a header "
                                f"with {','.join(required)}")
     # A short row's missing fields read as empty, as csv.DictReader gives them.
-    return [{c: row[i] if i < len(row) else None for i, c in enumerate(header)} for _, row in body], header
+    return ([{c: row[i] if i < len(row) else None for i, c in enumerate(header)} for _, row in body], header,
+            [line for line, _ in body])
 
 
 def read_gt_csv(path) -> GroundTruth:
@@ -526,7 +528,7 @@ def read_gt_csv(path) -> GroundTruth:
     GroundTruthError
         Unreadable file, missing columns, or fields that are not numbers.
     """
-    rows, header = _read_csv_columns(path, GT_CSV_COLUMNS[:6], "ground truth")
+    rows, header, _ = _read_csv_columns(path, GT_CSV_COLUMNS[:6], "ground truth")
     try:
         frames = [int(float(r["frame"])) for r in rows]
         values = np.array([[_float(r.get(c)) for c in GT_CSV_COLUMNS[1:]] for r in rows], float).reshape(-1, 7)
@@ -610,9 +612,10 @@ def read_track_csv(path) -> Track:
     Raises
     ------
     GroundTruthError
-        Unreadable file, missing columns, or fields that are not numbers.
+        Unreadable file, missing columns, fields that are not numbers, a ``status`` other than ``init``,
+        ``tracked`` and ``lost``, or a ``score`` outside [0, 1].
     """
-    rows, header = _read_csv_columns(path, RUN_CSV_REQUIRED, "run CSV")
+    rows, header, lines = _read_csv_columns(path, RUN_CSV_REQUIRED, "run CSV")
     if not rows:
         raise GroundTruthError(f"run CSV '{path}' has no rows")
     try:
@@ -624,6 +627,14 @@ def read_track_csv(path) -> Track:
     except (TypeError, ValueError) as exc:
         raise GroundTruthError(f"run CSV '{path}' has a field that is not a number ({exc})") from None
     status = [(r.get("status") or "tracked").strip() for r in rows]
+    # The metrics use neither, but a status or score outside the contract is a file that went wrong (a typo, a
+    # column shifted), as plot and sheet say too.
+    for line, value, level, text in zip(lines, status, score, (r.get("score") for r in rows)):
+        if value not in STATUSES:
+            raise GroundTruthError(f"run CSV '{path}' line {line}: status '{value}' is not one of "
+                                   f"{', '.join(STATUSES)}")
+        if not 0.0 <= level <= 1.0 and not math.isnan(level):
+            raise GroundTruthError(f"run CSV '{path}' line {line}: score '{text}' is not in [0, 1]")
     return Track(frames, ell, scale, rot, score, status)
 
 

@@ -542,7 +542,7 @@ def read_run_csv(path) -> RunTable:
 
     The header must start with :data:`~logpolar_track.results.COLUMNS` in order (later columns, appended by
     newer versions, are ignored); every row needs an integer ``frame`` (increasing), numbers in ``time_s``,
-    ``cx``, ``cy``, ``a``, ``b`` (> 0), ``angle_deg``, ``scale`` and ``score``, a number or nothing in
+    ``cx``, ``cy``, ``a``, ``b`` (> 0), ``angle_deg``, ``scale`` and ``score`` (0 to 1), a number or nothing in
     ``rotation_deg``, and a ``status`` among ``init``, ``tracked``, ``lost``.
 
     Raises
@@ -586,6 +586,8 @@ def read_run_csv(path) -> RunTable:
                 raise bad(column, "a number") from None
             if not math.isfinite(value) or (column in ("a", "b") and value <= 0):
                 raise bad(column, "a finite number" + (" > 0" if column in ("a", "b") else ""))
+            if column == "score" and not 0.0 <= value <= 1.0:
+                raise bad(column, "in [0, 1]")
             table[column].append(value)
         rot = fields["rotation_deg"]
         try:

@@ -20,6 +20,7 @@ from conftest import decode_all
 
 from logpolar_track.cli import main
 from logpolar_track.errors import RoiError, UsageError
+from logpolar_track.evaluate import GroundTruthError, read_track_csv
 from logpolar_track.geometry import Ellipse, parse_roi
 from logpolar_track.look import (GRID_COLOUR, PLOT_DPI, PLOT_SIZE_IN, draw_grid, find_video_for_csv,
                                  read_frame, read_run_csv, roi_from_box, roi_from_points, sheet_geometry,
@@ -253,6 +254,7 @@ def bad_csvs(folder: Path, good: Path) -> dict[str, Path]:
         "header": ["frame,x,y,r"] + [",".join(line.split(",")[:4]) for line in lines[1:]],
         "status": lines[:2] + [lines[2].rsplit(",", 1)[0] + ",found"] + lines[3:],
         "number": lines[:3] + [lines[3].replace(lines[3].split(",")[2], "abc", 1)] + lines[4:],
+        "score": lines[:4] + [",".join(lines[4].split(",")[:-2] + ["1.5", "tracked"])] + lines[5:],
         "empty": [],
     }
     paths = {}
@@ -277,7 +279,19 @@ def test_read_run_csv_follows_the_contract(tiny_run, tmp_path):
     assert ",".join(COLUMNS) in messages["header"]
     assert "line 3" in messages["status"] and "init, tracked, lost" in messages["status"]
     assert "line 4" in messages["number"] and "'abc' is not a number" in messages["number"]
+    assert "line 5" in messages["score"] and "'1.5' is not in [0, 1]" in messages["score"]
     assert "empty" in messages["empty"]
+
+
+def test_eval_refuses_a_status_or_score_off_contract_as_plot_and_sheet_do(tiny_run, tmp_path):
+    """``eval`` reads predictions of other tools too (only frame and the ellipse are required), but a status or
+    a score the contract does not allow is a file gone wrong: it scored a status 'found' and a score 1.5."""
+    _, run_csv, _ = tiny_run
+    cases = bad_csvs(tmp_path, run_csv)
+    with pytest.raises(GroundTruthError, match="line 3: status 'found' is not one of init, tracked, lost"):
+        read_track_csv(cases["status"])
+    with pytest.raises(GroundTruthError, match=r"line 5: score '1.5' is not in \[0, 1\]"):
+        read_track_csv(cases["score"])
 
 
 def test_json_lines_of_a_run_read_back_as_its_csv(tiny_run, tmp_path):

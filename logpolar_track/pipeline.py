@@ -280,10 +280,12 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
             raise UsageError(f"cannot write the CSV to '{csv_out}': '{Path(csv_out).suffix}' is a video's or an "
                              f"image's extension; name it .csv (or .jsonl), or give the video with -o")
         planned.append((Path(csv_out), "output CSV"))
+    inputs = [(video_path, "the input video")] + [(roi, "the input's ROI file") for roi in roi_sidecar_paths(video_path)]
     for out, what in planned:
         check_output_path(out, overwrite=overwrite, what=what, special_ok=what == "output CSV")
-        if out.exists() and out.resolve() == video_path.resolve():
-            raise OutputError(f"{what} '{out}' is the input video; choose another name")
+        for source, name in inputs:
+            if out.exists() and source.exists() and out.resolve() == source.resolve():
+                raise OutputError(f"{what} '{out}' is {name}; choose another name")
     if len(planned) == 2 and planned[0][0].resolve() == planned[1][0].resolve():
         raise OutputError(f"the output video and the output CSV are the same file '{planned[0][0]}'")
 

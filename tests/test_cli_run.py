@@ -268,6 +268,10 @@ BAD = {
     "output-folder-is-a-file": (None, ["--csv", "{video}/out.csv"], 1, ["not a folder"]),
     "out-dir-is-a-file": (None, ["--out-dir", "{video}"], 1, ["tiny.mp4' is a file, not a folder"]),
     "out-dir-below-a-file": (None, ["--out-dir", "{video}/sub"], 1, ["tiny.mp4' is a file, not a folder"]),
+    "csv-is-the-roi-file": (None, ["--csv", "{roi}", "--no-video", "--overwrite"], 1,
+                            ["output CSV", "tiny.roi' is the input's ROI file; choose another name"]),
+    "video-is-the-input": (None, ["--out", "{video}", "--overwrite"], 1,
+                           ["output video", "tiny.mp4' is the input video; choose another name"]),
     "zero-frames": (None, ["--frames", "0"], 2, ["--frames"]),
     "unsupported-video-extension": (None, ["--out", "out.txt"], 2, ["unsupported extension", ".mp4"]),
     "out-and-no-video": (None, ["--out", "a.mp4", "--no-video"], 2, ["--no-video"]),
@@ -288,7 +292,7 @@ BAD = {
 def test_bad_input(tiny_video, workdir, make, args, code, fragments):
     video = make(tiny_video.path.parent) if make else tiny_video.path
     inputs_before = listing(tiny_video.path.parent)
-    args = [a.replace("{video}", str(video)) for a in args]
+    args = [a.replace("{video}", str(video)).replace("{roi}", str(video.with_suffix(".roi"))) for a in args]
     result = invoke(video, *args)
     assert result.exit_code == code, result.stderr
     assert "Traceback" not in result.output

@@ -532,14 +532,19 @@ def plot_curves(summary: list[dict], path) -> None:
     if not path.parent.is_dir():
         raise OutputError(f"cannot write '{path}': folder '{path.parent}' does not exist")
     fig, (ax_s, ax_p) = plt.subplots(1, 2, figsize=(11, 4.5))
+    # Each tracker keeps its colour in both panels (the legends are ranked, each by its own panel's figure).
+    palette = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    colour = {s["tracker"]: palette[i % len(palette)] for i, s in enumerate(summary)}
     for s in sorted(summary, key=lambda s: -(s["auc"] or 0)):
-        ax_s.plot(IOU_THRESHOLDS, s["success_curve"], label=f"{s['tracker']} [{_cell(s['auc'], '.3f')}]")
+        ax_s.plot(IOU_THRESHOLDS, s["success_curve"], color=colour[s["tracker"]],
+                  label=f"{s['tracker']} [{_cell(s['auc'], '.3f')}]")
     for s in sorted(summary, key=lambda s: -(s["precision_20"] or 0)):
-        ax_p.plot(PRECISION_THRESHOLDS, s["precision_curve"],
+        ax_p.plot(PRECISION_THRESHOLDS, s["precision_curve"], color=colour[s["tracker"]],
                   label=f"{s['tracker']} [{_cell(s['precision_20'], '.3f')}]")
-    ax_s.set(title="Success plot", xlabel="IoU threshold", ylabel="success rate", xlim=(0, 1), ylim=(0, 1))
+    # A little room above 1, so that a curve at 1 (a tracker right on every frame) is not hidden by the frame.
+    ax_s.set(title="Success plot", xlabel="IoU threshold", ylabel="success rate", xlim=(0, 1), ylim=(0, 1.02))
     ax_p.set(title="Precision plot", xlabel="centre error threshold (px)", ylabel="precision",
-             xlim=(0, PRECISION_THRESHOLDS[-1]), ylim=(0, 1))
+             xlim=(0, PRECISION_THRESHOLDS[-1]), ylim=(0, 1.02))
     for ax in (ax_s, ax_p):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="lower left" if ax is ax_s else "lower right")

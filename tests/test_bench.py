@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 import cv2
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -394,6 +395,31 @@ def test_plot(dataset, tmp_path):
         return
     assert res.exit_code == 0, res.stderr
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_plot_gives_a_tracker_one_colour_in_both_panels(tmp_path, monkeypatch):
+    """The legends rank the trackers, each panel by its own figure; the colours followed the ranking, so a tracker
+    first in one panel and second in the other changed colour between them."""
+    pytest.importorskip("matplotlib")
+    from matplotlib.figure import Figure
+
+    from logpolar_track.bench import IOU_THRESHOLDS, PRECISION_THRESHOLDS, plot_curves
+
+    colours = {}
+
+    def record(figure, path, **kwargs):
+        Path(path).write_bytes(b"")
+        for ax in figure.axes:
+            colours[ax.get_title()] = {line.get_label().split(" [")[0]: line.get_color() for line in ax.lines}
+
+    monkeypatch.setattr(Figure, "savefig", record)
+    ramp = np.linspace(1, 0, len(IOU_THRESHOLDS)), np.linspace(0, 1, len(PRECISION_THRESHOLDS))
+    summary = [{"tracker": "a", "auc": 0.6, "precision_20": 0.5, "success_curve": ramp[0], "precision_curve": ramp[1]},
+               {"tracker": "b", "auc": 0.5, "precision_20": 0.7, "success_curve": ramp[0] / 2,
+                "precision_curve": ramp[1] / 2}]
+    plot_curves(summary, tmp_path / "p.png")
+    assert colours["Success plot"] == colours["Precision plot"]
+    assert colours["Success plot"]["a"] != colours["Success plot"]["b"]
 
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_videos"

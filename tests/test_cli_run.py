@@ -685,6 +685,11 @@ def test_an_image_sequence_runs_like_a_video(tiny_video, image_sequence, workdir
     assert {r["status"] for r in rows[1:]} == {"tracked"}
     assert np.median(centre_errors(rows, tiny_video.poses)) < 1.0
     assert count_frames(workdir / "frame.lptrack.mp4")[:2] == (tiny_video.n_frames, tiny_video.size)
+    # Without an output video the rate is only the times'.
+    result = invoke(image_sequence, "--roi", "80,60,20", "--no-video", "--csv", "-")
+    assert result.exit_code == 0, result.stderr
+    assert (f"lptrack: warning: '{image_sequence}' reports no frame rate; assumed 25 fps for time_s\n"
+            in result.stderr)
 
 
 def test_an_image_sequence_reads_its_roi_sidecar_and_goes_through_a_batch(tiny_video, image_sequence, workdir):

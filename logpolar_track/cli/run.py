@@ -314,8 +314,9 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
         click.echo(f"lptrack: note: the ROI came from {video.name}'s .roi file and was applied to start frame "
                    f"{start_frame}", err=True)
     if summary.video_fps_guessed:
+        uses = "time_s" if summary.video_out is None else "time_s and the output video"
         click.echo(f"lptrack: warning: '{video}' reports no frame rate; assumed {summary.video_fps:g} fps "
-                   f"for time_s and the output video", err=True)
+                   f"for {uses}", err=True)
     if summary.truncated:
         click.echo(f"lptrack: warning: {_truncation(video.name, summary.frames, summary.expected_frames)}",
                    err=True)
@@ -401,7 +402,7 @@ def _report(summary: BatchSummary, *, quiet: bool) -> None:
         rates = (f" ({summary.frames / seconds:.1f} frames/s, {ran / seconds:.2f} videos/s)" if summary.frames
                  else "")
         click.echo(f"lptrack: {count} video{'' if count == 1 else 's'}: {', '.join(parts)}; {summary.frames} "
-                   f"frames in {summary.seconds:.1f} s{rates}", err=True)
+                   f"frame{'' if summary.frames == 1 else 's'} in {summary.seconds:.1f} s{rates}", err=True)
         for outcome in summary.outcomes:
             if outcome.truncated:
                 click.echo(f"lptrack: warning: {_truncation(outcome.label, outcome.frames, outcome.expected_frames)}",

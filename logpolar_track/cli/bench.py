@@ -229,7 +229,8 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, ove
     """Score a run's CSV (PRED.csv from 'lptrack run') against ground truth GT.
 
     GT is a <name>.gt.csv, an OTB groundtruth_rect.txt, a VOT groundtruth.txt,
-    a UAV123 <name>.txt, or a sequence folder holding one of them. Frames are
+    a UAV123 <name>.txt, a sequence folder holding one of them, or a video
+    (its <name>.gt.csv beside it, as in sample_videos/). Frames are
     matched by index (line k of a .txt file is frame k-1); the metrics are
     those of 'lptrack bench' (see 'lptrack bench --help').
     """

@@ -271,14 +271,55 @@ def test_every_accepted_frame_layout_tracks_alike(name):
     (np.zeros((120, 160, 3)), "got float64"),
     (np.zeros((120, 160, 2), np.uint8), "got shape (120, 160, 2)"),
     (np.zeros((100, 160, 3), np.uint8), "the size of the first (160x120 pixels), got 160x100"),
+    (np.zeros((120, 160), np.uint8), "laid out as the first (BGR uint8), got grey uint8"),
+    (np.zeros((120, 160, 3), np.float32), "laid out as the first (BGR uint8), got BGR float32"),
 ])
 def test_update_refuses_what_it_cannot_track(name, frame, fragment):
-    """A frame given to update() is held to init()'s rules, and to the first frame's size: one line saying what
-    is wrong, not an OpenCV assertion or a track in the wrong place."""
+    """A frame given to update() is held to init()'s rules, and to the first frame's size and layout: one line
+    saying what is wrong, not an OpenCV assertion or a track in the wrong place (lpcf's colour model, built from
+    a BGR first frame, failed on a grey one in cv2.transform and on a float one in a shift)."""
     tracker = create_tracker(name)
     tracker.init(random_texture(120, 160, np.random.default_rng(0)), Ellipse(80, 60, 20, 20, 0))
     with pytest.raises(UsageError, match=re.escape(fragment)):
         tracker.update(frame)
+
+
+@pytest.mark.parametrize("name", [n for n in tracker_names() if not n.startswith("cv-")])
+def test_a_roi_angle_of_many_turns_tracks_as_its_angle_within_one(name):
+    """An Ellipse's angle may be any finite number; the trackers compute their patches' angles from it, and one of
+    1e300 degrees (through the API) left no precision for the turn tracked (4041 degrees reported for 39.5)."""
+    rng = np.random.default_rng(2)
+    roi = Ellipse(80, 60, 25, 15, 30.0)
+    poses = [Pose(80, 60, 1.0, 2.0 * i) for i in range(6)]
+    frames = list(synthetic_sequence(poses, roi, size=(160, 120), seed=2))
+    rotations = []
+    for angle in (30.0, 30.0 + 360.0 * 10 ** 6, 1e300):
+        tracker = create_tracker(name)
+        tracker.init(frames[0], Ellipse(80, 60, 25, 15, angle))
+        rotations.append([tracker.update(f)[1].rotation_deg for f in frames[1:]])
+    assert rotations[1] == pytest.approx(rotations[0], abs=1e-6)
+    assert abs(rotations[2][-1] - 10.0) < 4.0  # 1e300 is some angle, another axis of the object: its turn is read
+
+
+@pytest.mark.parametrize("name", [n for n in tracker_names() if not n.startswith("cv-")])
+def test_float_frames_beyond_0_to_255_track_as_clipped(name):
+    """Float32 frames are taken with values 0 to 255; NaN, infinities and values beyond are read as clipped to
+    that (NaN as 0) rather than passed on: NaN reached lpcf's features as a garbage bin index (IndexError)."""
+    frame = random_texture(120, 160, np.random.default_rng(0)).astype(np.float32)
+    broken = frame.copy()
+    broken[50:56, 70:76] = np.nan
+    broken[60:63, 80:90] = np.inf
+    broken[70, 60:70] = 1e30
+    broken[72, 60:70] = -40.0
+    clipped = np.clip(np.nan_to_num(broken, nan=0.0, posinf=255.0, neginf=0.0), 0, 255)
+    roi = Ellipse(80, 60, 20, 20, 0)
+    states = []
+    for start, later in ((broken, broken), (clipped, clipped)):
+        tracker = create_tracker(name)
+        tracker.init(start, roi)
+        states.append(tracker.update(later))
+    (ok, state), (ok_clipped, state_clipped) = states
+    assert ok == ok_clipped and state == state_clipped
 
 
 @pytest.mark.parametrize("name", [n for n in tracker_names() if n.startswith("cv-")])

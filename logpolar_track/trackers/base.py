@@ -16,7 +16,7 @@ from typing import Callable, ClassVar, Iterable
 import numpy as np
 
 from ..errors import LptrackError, UsageError
-from ..geometry import Ellipse, check_roi_fits
+from ..geometry import Ellipse, check_roi_fits, wrap_degrees
 from ..logpolar import to_gray
 
 
@@ -98,8 +98,13 @@ class SimilarityTracker(Tracker):
     def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
         frame = np.asarray(frame)
         check_start(frame, roi)
+        if abs(roi.angle_deg) > 360.0:
+            # The same ellipse, its angle within a turn: the patches' and grids' angles are computed from it, and a
+            # huge one (1e300, through the API) left no precision for the turns tracked (4041 degrees for 39.5).
+            roi = Ellipse(roi.cx, roi.cy, roi.a, roi.b, wrap_degrees(roi.angle_deg))
         self.roi = roi
         self.frame_size = frame.shape[1], frame.shape[0]  # (width, height), pixels
+        self.frame_layout = frame_layout(frame)
         self.last = Similarity(roi.cx, roi.cy, 1.0, 0.0, 1.0)
         self._start(self._prepared(frame), roi)
         return self._state(self.last)
@@ -108,7 +113,7 @@ class SimilarityTracker(Tracker):
         if self.last is None:
             raise RuntimeError("update() called before init()")
         frame = np.asarray(frame)
-        check_frame(frame, self.frame_size)
+        check_frame(frame, self.frame_size, self.frame_layout)
         estimate = self._estimate(self._prepared(frame), self.last)
         ok = (estimate is not None and estimate.score >= self.lost_threshold and _finite(estimate)
               and not self._searching())
@@ -146,10 +151,20 @@ class SimilarityTracker(Tracker):
         return False
 
 
-def check_frame(frame: np.ndarray, size: tuple[int, int] | None = None) -> None:
+_CHANNEL_NAMES = {1: "grey", 3: "BGR", 4: "BGRA"}
+
+
+def frame_layout(frame: np.ndarray) -> tuple[int, np.dtype]:
+    """``(channels, dtype)`` of an image: 1 for ``(H, W)`` and ``(H, W, 1)`` grey, 3 for BGR, 4 for BGRA."""
+    return (frame.shape[2] if frame.ndim == 3 else 1), frame.dtype
+
+
+def check_frame(frame: np.ndarray, size: tuple[int, int] | None = None,
+                layout: tuple[int, np.dtype] | None = None) -> None:
     """Raise :class:`UsageError` unless ``frame`` is an image a tracker takes, of ``size`` ``(width, height)``
-    (pixels) if given: what every tracker's ``update`` needs (a frame of another size mid-stream would be
-    tracked in the wrong place).
+    (pixels) and :func:`frame_layout` ``layout`` if given: what every tracker's ``update`` needs (a frame of
+    another size mid-stream would be tracked in the wrong place, and one of other channels or element type
+    against models built from colour or from the first frame's range).
 
     An image is ``(H, W)`` or ``(H, W, 1)`` grey, ``(H, W, 3)`` BGR or ``(H, W, 4)`` BGRA, not empty, of uint8 (as
     ``cv2.VideoCapture`` and ``cv2.imread`` give) or float32 with values from 0 to 255. Other element types are
@@ -165,6 +180,11 @@ def check_frame(frame: np.ndarray, size: tuple[int, int] | None = None) -> None:
     if size is not None and (frame.shape[1], frame.shape[0]) != size:
         raise UsageError(f"every frame must have the size of the first ({size[0]}x{size[1]} pixels), got "
                          f"{frame.shape[1]}x{frame.shape[0]}")
+    if layout is not None and frame_layout(frame) != layout:
+        def name(channels, dtype):
+            return f"{_CHANNEL_NAMES[channels]} {np.dtype(dtype).name}"
+        raise UsageError(f"every frame must be laid out as the first ({name(*layout)}), got "
+                         f"{name(*frame_layout(frame))}; convert the frames alike")
 
 
 def check_start(frame: np.ndarray, roi: Ellipse) -> None:

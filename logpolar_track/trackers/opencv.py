@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from ..geometry import Ellipse
-from .base import Tracker, TrackState, check_frame, check_ranges, check_start, register
+from .base import Tracker, TrackState, check_frame, check_ranges, frame_layout, check_start, register
 
 _CONTRIB_HINT = ("needs opencv-contrib-python-headless instead of opencv-python-headless "
                  "(swap them: pip uninstall opencv-python-headless && pip install opencv-contrib-python-headless)")
@@ -82,7 +82,7 @@ class _OpenCVTracker(Tracker):
         cv2.setRNGSeed(self.seed)
         self._tracker = self._create()
         self._tracker.init(_bgr(frame), box)
-        self._frame_size = frame.shape[1], frame.shape[0]
+        self._frame_size, self._frame_layout = (frame.shape[1], frame.shape[0]), frame_layout(frame)
         self._roi, self._box0 = roi, box
         self._size0 = math.sqrt(box[2] * box[3])
         self._last = TrackState(roi, 1.0, None, 1.0)
@@ -92,7 +92,7 @@ class _OpenCVTracker(Tracker):
         if self._tracker is None:
             raise RuntimeError("update() called before init()")
         frame = np.asarray(frame)
-        check_frame(frame, self._frame_size)
+        check_frame(frame, self._frame_size, self._frame_layout)
         ok, box = self._tracker.update(_bgr(frame))
         box = tuple(float(v) for v in box)
         if not ok or box[2] <= 0 or box[3] <= 0 or not all(math.isfinite(v) for v in box):

@@ -671,8 +671,11 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self.spin_deg, self.zoom = 0.0, 0.0
             return refined
         # Where the refinement is believed (a rigid object), the tracker's own size is reported and the scale
-        # filter is left alone (see scale_filter).
-        size_believed = distance is not None and distance < self.refine_max_distance
+        # filter is left alone (see scale_filter). A sliver has no refinement to say so: there a log-polar match
+        # that is believed in full (``trust_high``) does (a 100 x 15 px ellipse shrinking to half was reported at
+        # 0.915 of its size by the scale filter, whose box of a sliver is mostly its surround; 0.501 by its own).
+        size_believed = ((distance is not None and distance < self.refine_max_distance)
+                         or (self.appearance is None and lp_height >= self.trust_high))
         shown = refined
         if self._scale_filter is not None:
             shown = self._shown_size(frame, refined, size_believed)

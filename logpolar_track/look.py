@@ -800,7 +800,8 @@ def plot_track(run, out_png, *, video=None, ground_truth=None, overwrite: bool =
         for ax in axes[:3]:
             ax.axvspan(t[start] - dt / 2, t[stop - 1] + dt / 2, color="red", alpha=0.15, lw=0)
     if lost.any():
-        ax_score.plot([], [], color="red", alpha=0.3, lw=6, label=f"lost ({int(lost.sum())} frame{'' if lost.sum() == 1 else 's'})")
+        count = int(lost.sum())
+        ax_score.plot([], [], color="red", alpha=0.3, lw=6, label=f"lost ({count} frame{'' if count == 1 else 's'})")
         ax_score.legend(fontsize=8, loc="lower left")
 
     if gt is not None:

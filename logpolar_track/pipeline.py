@@ -280,7 +280,8 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
             raise UsageError(f"cannot write the CSV to '{csv_out}': '{Path(csv_out).suffix}' is a video's or an "
                              f"image's extension; name it .csv (or .jsonl), or give the video with -o")
         planned.append((Path(csv_out), "output CSV"))
-    inputs = [(video_path, "the input video")] + [(roi, "the input's ROI file") for roi in roi_sidecar_paths(video_path)]
+    inputs = [(video_path, "the input video")]
+    inputs += [(roi, "the input's ROI file") for roi in roi_sidecar_paths(video_path)]
     for out, what in planned:
         check_output_path(out, overwrite=overwrite, what=what, special_ok=what == "output CSV")
         for source, name in inputs:

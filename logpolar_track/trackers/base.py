@@ -181,10 +181,12 @@ def check_frame(frame: np.ndarray, size: tuple[int, int] | None = None,
         raise UsageError(f"every frame must have the size of the first ({size[0]}x{size[1]} pixels), got "
                          f"{frame.shape[1]}x{frame.shape[0]}")
     if layout is not None and frame_layout(frame) != layout:
-        def name(channels, dtype):
-            return f"{_CHANNEL_NAMES[channels]} {np.dtype(dtype).name}"
-        raise UsageError(f"every frame must be laid out as the first ({name(*layout)}), got "
-                         f"{name(*frame_layout(frame))}; convert the frames alike")
+        raise UsageError(f"every frame must be laid out as the first ({_layout_name(*layout)}), got "
+                         f"{_layout_name(*frame_layout(frame))}; convert the frames alike")
+
+
+def _layout_name(channels: int, dtype) -> str:
+    return f"{_CHANNEL_NAMES[channels]} {np.dtype(dtype).name}"
 
 
 def check_start(frame: np.ndarray, roi: Ellipse) -> None:

@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from ..geometry import Ellipse
-from .base import Tracker, TrackState, check_frame, check_ranges, frame_layout, check_start, register
+from .base import Tracker, TrackState, check_frame, check_ranges, check_start, frame_layout, register
 
 _CONTRIB_HINT = ("needs opencv-contrib-python-headless instead of opencv-python-headless "
                  "(swap them: pip uninstall opencv-python-headless && pip install opencv-contrib-python-headless)")

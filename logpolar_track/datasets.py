@@ -107,8 +107,10 @@ class Sequence:
 def _image_frames(files, fps: float):
     import cv2
 
+    from .video import opencv_path
+
     for i, path in enumerate(files):
-        frame = cv2.imread(str(path), cv2.IMREAD_COLOR)
+        frame = cv2.imread(opencv_path(path, "image"), cv2.IMREAD_COLOR)
         if frame is None:
             raise VideoError(f"cannot read frame image '{path}'; expected a JPEG/PNG image")
         yield i, i / fps, frame
@@ -161,7 +163,9 @@ def _image_sequence(name: str, kind: str, folder: Path, gt_path: Path, files: li
 def _video_info(path: Path) -> tuple[int, float]:
     import cv2
 
-    cap = cv2.VideoCapture(str(path))
+    from .video import opencv_path
+
+    cap = cv2.VideoCapture(opencv_path(path, "video"))
     try:
         if not cap.isOpened():
             raise VideoError(f"cannot open video '{path}'; expected a readable video file")

@@ -41,7 +41,8 @@ from .evaluate import GroundTruthError, Track, read_data_file, rotation_errors, 
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
 from .results import COLUMNS, STATUSES, FrameResult
 from .trackers.base import TrackState
-from .video import VideoReader, check_output_path, guess_image_sequence, temporary_path, video_stem
+from .video import (VideoReader, check_output_path, guess_image_sequence, opencv_path, temporary_path,
+                    video_stem)
 
 #: BGR colour of the grid lines drawn by :func:`draw_grid` (cyan: rare in natural images, legible on both
 #: dark and light backgrounds).
@@ -282,6 +283,7 @@ def write_png(path, image: np.ndarray, *, overwrite: bool = False, what: str = "
     """
     check_image_suffix(path, (".png",), what)
     path = check_output_path(path, overwrite=overwrite, what=what)
+    opencv_path(path, what, OutputError)  # its temporary name shares the name's stem
     temp = temporary_path(path)
     try:
         if not cv2.imwrite(str(temp), image):

@@ -36,7 +36,7 @@ from typing import Iterator  # noqa: E402
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .errors import FrameRangeError, OutputError, UsageError, VideoError, counted  # noqa: E402
+from .errors import FrameRangeError, LptrackError, OutputError, UsageError, VideoError, counted  # noqa: E402
 
 #: Frame rate assumed when a container reports none (0 or NaN), in frames per second.
 FALLBACK_FPS = 25.0
@@ -162,12 +162,31 @@ def _not_opened(path: Path) -> VideoError:
                       f"truncated file, or a format this OpenCV build does not support)")
 
 
+def opencv_path(path, what: str, error: type[LptrackError] = VideoError) -> str:
+    """``path`` as the text OpenCV's functions take.
+
+    Raises
+    ------
+    LptrackError
+        (``error``, a :class:`VideoError` unless given) If the name is not valid UTF-8: bytes a Linux file system
+        allows in names, which Python keeps as surrogate escapes and OpenCV crashed on (a segmentation fault that
+        took a whole batch with it). ``what`` names the file in the message, e.g. ``"video"``.
+    """
+    text = str(path)
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        shown = text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+        raise error(f"{what} '{shown}': its name is not valid UTF-8, which OpenCV cannot open; rename it") from None
+    return text
+
+
 def _open_capture(path: Path) -> cv2.VideoCapture:
     """OpenCV's capture for ``path``, or an :class:`_ImageSequenceCapture` for an image-sequence pattern (one
     seam, so tests can stand in for odd containers)."""
     if is_image_sequence(path):
         return _ImageSequenceCapture(image_sequence_files(path))
-    return cv2.VideoCapture(str(path))
+    return cv2.VideoCapture(opencv_path(path, "video"))
 
 
 class _ImageSequenceCapture:
@@ -197,7 +216,7 @@ class _ImageSequenceCapture:
         if not self.grab():
             return False, None
         file = self._files[self._next - 1]
-        frame = cv2.imread(str(file), cv2.IMREAD_COLOR)
+        frame = cv2.imread(opencv_path(file, "image"), cv2.IMREAD_COLOR)
         if frame is None:
             raise VideoError(f"cannot read '{file}' as an image (not an image, damaged, or a format OpenCV "
                              f"cannot read)")
@@ -622,6 +641,7 @@ class VideoWriter:
             self.abort()
 
     def _open(self, width: int, height: int) -> None:
+        opencv_path(self.wanted_path, "output video", OutputError)  # its temporary name shares the name's stem
         tried = []
         for code, extension in CODECS_BY_EXTENSION[self.wanted_path.suffix.lower()]:
             target = self.wanted_path.with_suffix(extension) if extension != self.wanted_path.suffix.lower() \

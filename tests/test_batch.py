@@ -126,6 +126,31 @@ def recorded_bars(monkeypatch) -> list[RecordingBar]:
 
 
 @pytest.mark.parametrize("jobs", ["1", "2"])
+def _name_not_utf8(folder: Path, name: bytes) -> Path:
+    """``folder / name`` for a name of bytes that are not UTF-8 (a Linux file system allows them; Python keeps them
+    as surrogate escapes), or a skip where the file system or Python's file name encoding does not."""
+    if sys.getfilesystemencoding().lower() not in ("utf-8", "utf8"):
+        pytest.skip("file names are not UTF-8 here")
+    return Path(os.fsdecode(os.fsencode(str(folder)) + b"/" + name))
+
+
+def test_a_video_whose_name_is_not_utf8_fails_alone(work):
+    """OpenCV crashed (a segmentation fault) on such a name, and with --jobs 1 took the whole batch with it: the
+    videos after it were not run and no summary was given. It fails alone, saying why."""
+    day1 = work / "footage" / "day1"
+    bad = _name_not_utf8(day1, b"caf\xe9.mp4")
+    try:
+        shutil.copy(day1 / "a.mp4", bad)
+        shutil.copy(day1 / "a.roi", bad.with_suffix(".roi"))
+    except OSError:
+        pytest.skip("the file system refuses names that are not UTF-8")
+    result = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1")
+    assert result.exit_code == 1
+    assert files_under(work / "out") == ["a.lptrack.csv", "b.lptrack.csv"]
+    assert "its name is not valid UTF-8, which OpenCV cannot open; rename it" in result.stderr
+    assert "lptrack: 3 videos: 2 ok, 1 failed;" in result.stderr
+
+
 def test_batch_progress_bar_counts_frames_of_every_video(work, recorded_bars, jobs):
     result = invoke("footage", "--out-dir", "out", "--no-video", "--jobs", jobs)
     assert result.exit_code == 1

@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import gc
 import os
+import shutil
+import sys
 import signal
 import threading
 import time
 import weakref
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -479,6 +482,24 @@ def test_image_sequence_errors_say_what_is_wrong(tmp_path):
         with pytest.raises(VideoError, match=r"failed after frame 0: image '.*frame_0002.png' is 20x10 pixels, not "
                                              r"64x48 as the sequence's first"):
             next(frames)
+
+
+@pytest.mark.skipif(sys.getfilesystemencoding().lower() not in ("utf-8", "utf8"), reason="file names not UTF-8")
+def test_names_that_are_not_utf8_are_refused_before_opencv_sees_them(tiny_video, tmp_path):
+    """OpenCV crashes (a segmentation fault) on a path with surrogate escapes, Python's form of name bytes that
+    are not UTF-8: reading and writing such a name is a one-line error instead."""
+    bad = Path(os.fsdecode(os.fsencode(str(tmp_path)) + b"/caf\xe9.mp4"))
+    try:
+        shutil.copy(tiny_video.path, bad)
+    except OSError:
+        pytest.skip("the file system refuses names that are not UTF-8")
+    with pytest.raises(VideoError, match=r"video '.*caf\\xe9\.mp4': its name is not valid UTF-8"):
+        VideoReader(bad)
+    writer = VideoWriter(bad.with_name(bad.stem + "-out.mp4"), 25.0)
+    with pytest.raises(OutputError, match="its name is not valid UTF-8, which OpenCV cannot open; rename it"):
+        writer.write(tiny_video.frames[0])
+    writer.abort()
+    assert sorted(p.name for p in tmp_path.iterdir() if "-out" in p.name) == []
 
 
 def test_a_video_file_with_a_percent_in_its_name_is_a_video(make_video, tmp_path):

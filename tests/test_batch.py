@@ -125,7 +125,6 @@ def recorded_bars(monkeypatch) -> list[RecordingBar]:
     return RecordingBar.made
 
 
-@pytest.mark.parametrize("jobs", ["1", "2"])
 def _name_not_utf8(folder: Path, name: bytes) -> Path:
     """``folder / name`` for a name of bytes that are not UTF-8 (a Linux file system allows them; Python keeps them
     as surrogate escapes), or a skip where the file system or Python's file name encoding does not."""
@@ -151,6 +150,7 @@ def test_a_video_whose_name_is_not_utf8_fails_alone(work):
     assert "lptrack: 3 videos: 2 ok, 1 failed;" in result.stderr
 
 
+@pytest.mark.parametrize("jobs", ["1", "2"])
 def test_batch_progress_bar_counts_frames_of_every_video(work, recorded_bars, jobs):
     result = invoke("footage", "--out-dir", "out", "--no-video", "--jobs", jobs)
     assert result.exit_code == 1

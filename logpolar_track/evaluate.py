@@ -612,12 +612,20 @@ def read_track_csv(path) -> Track:
     Raises
     ------
     GroundTruthError
-        Unreadable file, missing columns, fields that are not numbers, a ``status`` other than ``init``,
+        Unreadable file, missing columns, fields that are not numbers, frames that do not increase, the rows of
+        several videos (a batch's stream, with its ``video`` column), a ``status`` other than ``init``,
         ``tracked`` and ``lost``, or a ``score`` outside [0, 1].
     """
     rows, header, lines = _read_csv_columns(path, RUN_CSV_REQUIRED, "run CSV")
     if not rows:
         raise GroundTruthError(f"run CSV '{path}' has no rows")
+    videos = list(dict.fromkeys(r.get("video") for r in rows)) if "video" in header else []
+    if len(videos) > 1:
+        # A batch's stream (``lptrack run a.mp4 b.mp4 --csv -``): its videos' frame numbers overlap, and the last
+        # video's rows were scored against the first one's ground truth.
+        shown = ", ".join(str(v) for v in videos[:3]) + (", ..." if len(videos) > 3 else "")
+        raise GroundTruthError(f"run CSV '{path}' holds the rows of {len(videos)} videos ({shown}: its 'video' "
+                               f"column); score one video's run (its own CSV, as --out-dir writes them)")
     try:
         frames = np.array([int(float(r["frame"])) for r in rows])
         ell = np.array([[_float(r[c]) for c in ("cx", "cy", "a", "b", "angle_deg")] for r in rows], float)
@@ -626,6 +634,11 @@ def read_track_csv(path) -> Track:
         score = np.array([_float(r.get("score", "1")) for r in rows], float)
     except (TypeError, ValueError) as exc:
         raise GroundTruthError(f"run CSV '{path}' has a field that is not a number ({exc})") from None
+    back = np.flatnonzero(np.diff(frames) <= 0)
+    if back.size:
+        line = lines[back[0] + 1]
+        raise GroundTruthError(f"run CSV '{path}' line {line}: frame {frames[back[0] + 1]} does not follow frame "
+                               f"{frames[back[0]]}; a run's frames increase")
     status = [(r.get("status") or "tracked").strip() for r in rows]
     # The metrics use neither, but a status or score outside the contract is a file that went wrong (a typo, a
     # column shifted), as plot and sheet say too.

@@ -294,6 +294,21 @@ def test_eval_refuses_a_status_or_score_off_contract_as_plot_and_sheet_do(tiny_r
         read_track_csv(cases["score"])
 
 
+def test_eval_refuses_a_batch_stream_of_several_videos(tiny_run, tmp_path):
+    """``run a b --csv -`` writes one stream with a 'video' column; its videos' frame numbers overlap, and eval
+    scored the last video's rows against the first one's ground truth (AUC 0.038 for a run of 0.787)."""
+    _, run_csv, _ = tiny_run
+    header, *rows = run_csv.read_text().splitlines()
+    stream = tmp_path / "two.csv"
+    stream.write_text("\n".join([header + ",video"] + [r + ",a.mp4" for r in rows] + [r + ",b.mp4" for r in rows])
+                      + "\n")
+    with pytest.raises(GroundTruthError, match=r"holds the rows of 2 videos \(a.mp4, b.mp4: its 'video' column\)"):
+        read_track_csv(stream)
+    stream.write_text("\n".join([header] + rows + rows[1:]) + "\n")
+    with pytest.raises(GroundTruthError, match=f"line {len(rows) + 2}: frame 1 does not follow frame {len(rows) - 1}"):
+        read_track_csv(stream)
+
+
 def test_json_lines_of_a_run_read_back_as_its_csv(tiny_run, tmp_path):
     """What ``run --format jsonl`` writes, ``plot``, ``sheet`` and ``eval`` read as the CSV."""
     video, run_csv, _ = tiny_run

@@ -20,6 +20,7 @@ import gc
 import multiprocessing
 import os
 import signal
+import socket
 import threading
 import time
 from collections import deque
@@ -332,32 +333,72 @@ def _stop(running: list[_Running], on_worker_death) -> None:
 
 # -- Dask ----------------------------------------------------------------------------------------------
 
+#: Seconds to wait for a Dask scheduler: for its port to accept a connection, and then for its answer.
+SCHEDULER_CONNECT_S, SCHEDULER_ANSWER_S = 5.0, 10.0
+
+
+def _connect(client_class, scheduler: str):
+    """A ``dask.distributed`` client of the scheduler at address ``scheduler``.
+
+    Raises
+    ------
+    UsageError
+        A malformed address ('nonsense', 'tcp://host' without a port).
+    LptrackError
+        Nothing accepts connections there (refused, or a host that does not resolve: said at once, where Dask
+        retried for its whole timeout), something that is not a Dask scheduler does (an HTTP server: Dask waited
+        for its handshake for ever), or Dask could not connect (a ``tls://`` address without Dask's TLS settings
+        raised a TypeError).
+    """
+    address = str(scheduler)
+    host, _, port = address.split("://", 1)[-1].rpartition(":")
+    if "://" not in address or address.startswith("tcp://"):
+        if port.isdigit() and host:
+            try:
+                socket.create_connection((host.strip("[]"), int(port)), timeout=SCHEDULER_CONNECT_S).close()
+            except OSError as exc:
+                raise LptrackError(f"cannot reach the Dask scheduler '{scheduler}': {describe_exception(exc)}") \
+                    from None
+    made: dict[str, Any] = {}
+
+    def make() -> None:
+        try:
+            made["client"] = client_class(scheduler, timeout=f"{SCHEDULER_ANSWER_S:g}s", set_as_default=False)
+        except BaseException as exc:  # noqa: BLE001 - handed over to the caller's thread below
+            made["error"] = exc
+
+    # In a thread of its own, so that a peer that never answers (Dask waited for its handshake without end) is
+    # given up on, and Ctrl-C is heard meanwhile.
+    thread = threading.Thread(target=make, name="lptrack-dask-connect", daemon=True)
+    thread.start()
+    deadline = 1.5 * SCHEDULER_ANSWER_S  # Dask's own timeout first, where it comes
+    thread.join(deadline)
+    if thread.is_alive():
+        raise LptrackError(f"the Dask scheduler '{scheduler}' did not answer within {deadline:g} s (is it a Dask "
+                           f"scheduler's address?)")
+    error = made.pop("error", None)
+    if error is None:
+        return made["client"]
+    malformed = isinstance(error, ValueError)  # the address itself
+    message = str(error) if malformed else describe_exception(error)
+    # A Client that failed half-made lingers in reference cycles (and in the exception's traceback). Left to the
+    # end of the interpreter, its __del__ waits 30 s for its event loop, stopped by then; collected now, while the
+    # loop runs, it closes at once.
+    del error
+    gc.collect()
+    if malformed:
+        raise UsageError(f"--scheduler '{scheduler}' is not a Dask scheduler address ({message}); give one like "
+                         f"tcp://10.0.0.5:8786")
+    raise LptrackError(f"cannot connect to the Dask scheduler '{scheduler}': {message}")
+
+
 def _run_on_dask(function, items, scheduler) -> Iterator[TaskOutcome]:
     try:
         from dask.distributed import Client, as_completed
     except ImportError:
         raise UsageError(DASK_HINT) from None
     own_client = not isinstance(scheduler, Client)
-    client = scheduler
-    if own_client:
-        malformed = unreachable = None
-        try:
-            client = Client(scheduler, timeout="15s", set_as_default=False)
-        except ValueError as exc:  # the address itself: 'nonsense', 'tcp://host' without a port
-            malformed = str(exc)
-        except (OSError, TimeoutError) as exc:
-            unreachable = describe_exception(exc)
-        if malformed is not None or unreachable is not None:
-            # A Client that failed half-made lingers in reference cycles (and in the caught exception's
-            # traceback, hence outside the except clauses). Left to the end of the interpreter, its __del__
-            # waits 30 s for its event loop, stopped by then; collected now, while the loop runs, it closes at
-            # once.
-            gc.collect()
-        if malformed is not None:
-            raise UsageError(f"--scheduler '{scheduler}' is not a Dask scheduler address ({malformed}); give "
-                             f"one like tcp://10.0.0.5:8786")
-        if unreachable is not None:
-            raise LptrackError(f"cannot reach the Dask scheduler '{scheduler}': {unreachable}")
+    client = _connect(Client, scheduler) if own_client else scheduler
     futures = {}
     try:
         for index, item in enumerate(items):

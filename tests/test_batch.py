@@ -11,6 +11,7 @@ import os
 import re
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -509,6 +510,37 @@ def test_malformed_scheduler_address_is_one_line_and_ends_at_once(work):
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr == ("lptrack: error: --scheduler 'nonsense' is not a Dask scheduler address (missing port "
                            "number in address 'nonsense'); give one like tcp://10.0.0.5:8786\n")
+
+
+def test_a_scheduler_address_that_is_not_a_dask_scheduler_is_one_line(work, monkeypatch):
+    """Nothing listening there is said at once (Dask retried for its whole timeout, 15 s); something listening
+    that never answers as Dask does (an HTTP server) is given up on (Dask waited for its handshake for ever, and
+    Ctrl-C then took 30 s and printed a traceback); a tls:// address without Dask's TLS settings is one line (it
+    was a traceback of Dask's TypeError)."""
+    pytest.importorskip("dask.distributed")
+    from logpolar_track import executor
+
+    silent = socket.socket()
+    silent.bind(("127.0.0.1", 0))
+    silent.listen()  # accepts connections (the kernel's backlog) and never says a word
+    closed = socket.socket()
+    closed.bind(("127.0.0.1", 0))
+    refused = closed.getsockname()[1]
+    closed.close()
+    monkeypatch.setattr(executor, "SCHEDULER_ANSWER_S", 0.5)
+    try:
+        cases = {f"tcp://127.0.0.1:{refused}": "cannot reach the Dask scheduler",
+                 f"tcp://127.0.0.1:{silent.getsockname()[1]}": "did not answer within 0.75 s (is it a Dask "
+                                                               "scheduler's address?)",
+                 "tls://127.0.0.1:8786": "cannot connect to the Dask scheduler 'tls://127.0.0.1:8786': TypeError"}
+        for address, fragment in cases.items():
+            result = invoke("footage/day1", "--no-video", "--out-dir", "out", "--scheduler", address)
+            assert result.exit_code == 1, (address, result.stderr)
+            lines = result.stderr.splitlines()
+            assert len(lines) == 1 and lines[0].startswith("lptrack: error: ") and fragment in lines[0], lines
+    finally:
+        silent.close()
+    assert not (work / "out").exists()
 
 
 def test_scheduler_without_dask_gives_a_hint(work, monkeypatch):

@@ -303,11 +303,20 @@ def _data_suffix(data_format: str) -> str:
 
 
 def _relative_names(videos: list[VideoInput]) -> list[Path]:
-    """Each input's path relative to its root folder; loose files relative to their common folder."""
+    """Each input's path relative to its root folder; loose files relative to their common folder. Where two
+    root folders hold the same relative path (``day1/cam.mp4`` and ``day2/cam.mp4``, given as ``day1 day2``), the
+    inputs of those folders are named under their folder's name (``day1/cam.mp4``), as ``cp -r day1 day2 out``
+    copies them."""
     loose = [video_key(v.path).parent for v in videos if v.root is None]
     common = Path(os.path.commonpath(loose)) if loose else None
-    return [v.path.relative_to(v.root) if v.root is not None else video_key(v.path).relative_to(common)
-            for v in videos]
+    names = [v.path.relative_to(v.root) if v.root is not None else video_key(v.path).relative_to(common)
+             for v in videos]
+    roots_of: dict[Path, set] = {}
+    for v, name in zip(videos, names):
+        if v.root is not None:
+            roots_of.setdefault(name, set()).add(v.root)
+    shared = set().union(*(roots for roots in roots_of.values() if len(roots) > 1))
+    return [Path(v.root.name) / name if v.root in shared else name for v, name in zip(videos, names)]
 
 
 def video_output_candidates(video_out: Path) -> list[Path]:

@@ -391,12 +391,22 @@ def test_outputs_never_collide(work):
     plan = plan_batch([VideoInput(Path("footage/day2/a.avi")), VideoInput(Path("footage/day2/c.avi"))] +
                       [VideoInput(Path("footage/day2/a.mp4"))], out_dir="out")
     assert [j.csv_out.name for j in plan.jobs] == ["a.avi.lptrack.csv", "c.lptrack.csv", "a.mp4.lptrack.csv"]
-    # Two folders holding the same relative name: the second cannot have the first's outputs.
+    # Two folders holding the same relative name: their inputs go under the folders' names, as cp -r would put
+    # them (the second failed, as it would overwrite the first's outputs, and the first's names were spoilt).
     (work / "again/day1").mkdir(parents=True)
     shutil.copy(work / "footage/day1/a.mp4", work / "again/day1/a.mp4")
     plan = plan_batch(find_videos(["footage", "again"]), roi=Ellipse.circle(80, 60, 20), out_dir="out")
-    assert plan.settled["again/day1/a.mp4"].status == "failed"
-    assert "would overwrite those of 'footage/day1/a.mp4'" in plan.settled["again/day1/a.mp4"].reason
+    assert not plan.settled
+    outputs = {j.label: str(j.csv_out.relative_to(work / "out")) for j in plan.jobs}
+    assert outputs["footage/day1/a.mp4"] == "footage/day1/a.lptrack.csv"
+    assert outputs["footage/day1/b.mp4"] == "footage/day1/b.lptrack.csv"
+    assert outputs["again/day1/a.mp4"] == "again/day1/a.lptrack.csv"
+    # ... and folders of one name too: the second cannot have the first's outputs.
+    (work / "more/footage/day1").mkdir(parents=True)
+    shutil.copy(work / "footage/day1/a.mp4", work / "more/footage/day1/a.mp4")
+    plan = plan_batch(find_videos(["footage", "more/footage"]), roi=Ellipse.circle(80, 60, 20), out_dir="out")
+    assert plan.settled["more/footage/day1/a.mp4"].status == "failed"
+    assert "would overwrite those of 'footage/day1/a.mp4'" in plan.settled["more/footage/day1/a.mp4"].reason
 
 
 @pytest.mark.parametrize("args, fragment", [

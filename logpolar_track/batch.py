@@ -429,7 +429,8 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         Frames per second of every video instead of its own (for image sequences, which have none).
     out_dir : path
         Outputs go to ``out_dir/<path relative to the input folder>/<stem>.lptrack.{mp4,csv}``; a file name
-        shared by two inputs (``a.mp4`` and ``a.avi``) keeps its extension instead: ``a.mp4.lptrack.csv``.
+        shared by two inputs (``a.mp4`` and ``a.avi``) keeps its extension instead: ``a.mp4.lptrack.csv``; input
+        folders that hold the same relative paths are mirrored under their own names (``day1/cam.lptrack.csv``).
     video : bool
         Write annotated videos.
     stream : bool

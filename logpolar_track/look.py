@@ -161,9 +161,12 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None, f
         if time_s is not None and n and time_s < n / rate:
             # Within the last frame's time on screen, rounded up past it: that frame is the one shown.
             return read_frame(path, n - 1, fps=fps)
-        asked = f"frame {index}" if time_s is None else f"time {time_s:g} s (frame {index} at {rate:g} fps)"
-        raise FrameRangeError(f"{asked} lies past the end of '{path}', which has {counted(n, 'frame')}: give a "
-                              f"frame from 0 to {n - 1} (or a time before {n / rate:.3f} s)") from None
+        asked, valid = f"frame {index}", f"a frame from 0 to {n - 1}"
+        if time_s is not None:  # a time was asked for: say which times there are too (roi takes no time)
+            asked, valid = f"time {time_s:g} s (frame {index} at {rate:g} fps)", f"{valid} or a time before " \
+                                                                                f"{n / rate:.3f} s"
+        raise FrameRangeError(f"{asked} lies past the end of '{path}', which has {counted(n, 'frame')}: give "
+                              f"{valid}") from None
     with reader:
         return Frame(reader.first_frame.copy(), index, reader.time_of(index), reader.fps, reader.fps_guessed,
                      path)

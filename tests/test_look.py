@@ -76,8 +76,17 @@ def test_read_frame_at_a_time_on_the_last_frame_is_the_last_frame(tiny_video):
 
 
 def test_read_frame_past_the_end_gives_the_valid_range(tiny_video):
-    with pytest.raises(UsageError, match=r"frame 20 lies past the end .* 20 frames: give a frame from 0 to 19"):
+    # Only frames: roi, which reads a frame this way, takes no time.
+    with pytest.raises(UsageError, match=r"frame 20 lies past the end .* 20 frames: give a frame from 0 to 19$"):
         read_frame(tiny_video.path, 20)
+
+
+def test_roi_hint_quotes_a_path_the_shell_would_split(tiny_video, tmp_path):
+    spaced = tmp_path / "my clip.mp4"
+    shutil.copy(tiny_video.path, spaced)
+    result = invoke("roi", spaced, "--from-box", "60,40,40,40")
+    assert result.exit_code == 0, result.stderr
+    assert f"lptrack: check it with: lptrack frame '{spaced}' --at 0 --roi 80,60,20" in result.stderr
 
 
 def test_frame_command_writes_the_exact_frame(tiny_video, tmp_path, monkeypatch):

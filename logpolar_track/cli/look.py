@@ -6,6 +6,8 @@ stderr; errors are one ``lptrack: error:`` line.
 
 from __future__ import annotations
 
+import shlex
+
 from pathlib import Path
 
 import click
@@ -104,7 +106,9 @@ def roi(video: Path, index: int, box: str | None, points: str | None, round_tol:
     check_roi_fits(result, shot.width, shot.height, source=f"'{video.name}' (frame {index})")
     spec = result.to_spec()
     write_stdout(spec + "\n")
-    click.echo(f"lptrack: check it with: lptrack frame {video} --at {index} --roi {spec}", err=True)
+    # Quoted as a shell needs them (a path with spaces), so that the line can be pasted.
+    click.echo(f"lptrack: check it with: lptrack frame {shlex.quote(str(video))} --at {index} --roi {spec}",
+               err=True)
 
 
 @main.command("plot", cls=OneLineErrors, epilog="""\b

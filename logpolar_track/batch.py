@@ -104,7 +104,8 @@ class VideoOutcome:
 
     ``status`` is ``ok``, ``failed`` (``reason`` says why) or ``skipped`` (its outputs existed). ``frames``
     counts tracked frames; ``expected_frames`` is what the container announced, and ``truncated`` says that
-    fewer came (:attr:`RunSummary.truncated <logpolar_track.pipeline.RunSummary.truncated>`).
+    fewer came (:attr:`RunSummary.truncated <logpolar_track.pipeline.RunSummary.truncated>`). ``fps_assumed``
+    is the frame rate assumed for a source that reports none (an image sequence without ``fps``), else None.
     """
 
     label: str
@@ -116,6 +117,7 @@ class VideoOutcome:
     seconds: float = 0.0
     truncated: bool = False
     rows: str | None = None
+    fps_assumed: float | None = None
 
 
 @dataclass
@@ -505,8 +507,8 @@ def run_job(job: VideoJob, report: Callable[[int], None] | None = None) -> Video
                         csv_options=csv_options, tracker_params=job.tracker_params, fps=job.fps)
     return VideoOutcome(job.label, "ok", frames=summary.frames, lost=summary.lost,
                         expected_frames=summary.expected_frames, seconds=summary.seconds,
-                        truncated=summary.truncated,
-                        rows=None if buffer is None else buffer.getvalue())
+                        truncated=summary.truncated, rows=None if buffer is None else buffer.getvalue(),
+                        fps_assumed=summary.video_fps if summary.video_fps_guessed else None)
 
 
 def remove_temporary_outputs(job: VideoJob, pid: int) -> None:

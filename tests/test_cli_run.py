@@ -688,7 +688,8 @@ def test_an_image_sequence_runs_like_a_video(tiny_video, image_sequence, workdir
     # Without an output video the rate is only the times'.
     result = invoke(image_sequence, "--roi", "80,60,20", "--no-video", "--csv", "-")
     assert result.exit_code == 0, result.stderr
-    assert (f"lptrack: warning: '{image_sequence}' reports no frame rate; assumed 25 fps for time_s\n"
+    assert (f"lptrack: warning: '{image_sequence}' reports no frame rate; assumed 25 fps for time_s (give --fps to "
+            "set it)\n"
             in result.stderr)
 
 
@@ -699,6 +700,12 @@ def test_an_image_sequence_reads_its_roi_sidecar_and_goes_through_a_batch(tiny_v
     assert sorted(p.name for p in (workdir / "tracks").rglob("*.csv")) == ["frame.lptrack.csv", "tiny.lptrack.csv"]
     rows = read_rows(next((workdir / "tracks").rglob("frame.lptrack.csv")).read_text())
     assert len(rows) == tiny_video.n_frames and (rows[0]["cx"], rows[0]["a"]) == ("80.000", "20.000")
+    # The rate assumed for the sequence is said in a batch too (it was said for single runs only).
+    result = invoke(image_sequence, tiny_video.path, "--no-video", "--out-dir", "again")
+    assert result.exit_code == 0, result.stderr
+    assert (f"lptrack: warning: '{image_sequence}' reports no frame rate; assumed 25 fps for time_s (give --fps to "
+            f"set it)\n") in result.stderr
+    assert result.stderr.count("reports no frame rate") == 1
 
 
 def test_a_folder_of_images_given_as_the_video_is_told_its_pattern(image_sequence, workdir):

@@ -314,9 +314,8 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
         click.echo(f"lptrack: note: the ROI came from {video.name}'s .roi file and was applied to start frame "
                    f"{start_frame}", err=True)
     if summary.video_fps_guessed:
-        uses = "time_s" if summary.video_out is None else "time_s and the output video"
-        click.echo(f"lptrack: warning: '{video}' reports no frame rate; assumed {summary.video_fps:g} fps "
-                   f"for {uses}", err=True)
+        click.echo(f"lptrack: warning: {_rate_assumed(f'{video}', summary.video_fps, summary.video_out is not None)}",
+                   err=True)
     if summary.truncated:
         click.echo(f"lptrack: warning: {_truncation(video.name, summary.frames, summary.expected_frames)}",
                    err=True)
@@ -332,6 +331,11 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
     click.echo(f"lptrack: {video.name}: {summary.frames} frame{'' if summary.frames == 1 else 's'} "
                f"({summary.lost} lost) with {summary.tracker} at {summary.processing_fps:.1f} frames/s; "
                f"{'; '.join(outputs)}", err=True)
+
+
+def _rate_assumed(label: str, fps: float, video: bool) -> str:
+    uses = "time_s and the output video" if video else "time_s"
+    return f"'{label}' reports no frame rate; assumed {fps:g} fps for {uses} (give --fps to set it)"
 
 
 def _truncation(label: str, frames: int, expected: int) -> str:
@@ -384,11 +388,11 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
     finally:
         if bar is not None:
             bar.close()
-    _report(summary, quiet=quiet)
+    _report(summary, quiet=quiet, video=any(job.video_out is not None for job in plan.jobs))
     return summary
 
 
-def _report(summary: BatchSummary, *, quiet: bool) -> None:
+def _report(summary: BatchSummary, *, quiet: bool, video: bool) -> None:
     """The end of a batch on stderr: one summary line, then one line per failed or truncated video."""
     if not quiet:
         seconds = max(summary.seconds, 1e-9)
@@ -404,6 +408,8 @@ def _report(summary: BatchSummary, *, quiet: bool) -> None:
         click.echo(f"lptrack: {count} video{'' if count == 1 else 's'}: {', '.join(parts)}; {summary.frames} "
                    f"frame{'' if summary.frames == 1 else 's'} in {summary.seconds:.1f} s{rates}", err=True)
         for outcome in summary.outcomes:
+            if outcome.fps_assumed is not None:
+                click.echo(f"lptrack: warning: {_rate_assumed(outcome.label, outcome.fps_assumed, video)}", err=True)
             if outcome.truncated:
                 click.echo(f"lptrack: warning: {_truncation(outcome.label, outcome.frames, outcome.expected_frames)}",
                            err=True)

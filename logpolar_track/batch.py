@@ -305,20 +305,15 @@ def _data_suffix(data_format: str) -> str:
 
 
 def _relative_names(videos: list[VideoInput]) -> list[Path]:
-    """Each input's path relative to its root folder; loose files relative to their common folder. Where two
-    root folders hold the same relative path (``day1/cam.mp4`` and ``day2/cam.mp4``, given as ``day1 day2``), the
-    inputs of those folders are named under their folder's name (``day1/cam.mp4``), as ``cp -r day1 day2 out``
-    copies them."""
+    """Each input's path relative to its root folder; loose files relative to their common folder. Where several
+    root folders are given, each one's inputs are named under its folder's name (``day1/cam.mp4``,
+    ``day2/cam.mp4`` for ``day1 day2``), as ``cp -r day1 day2 out`` copies them."""
     loose = [video_key(v.path).parent for v in videos if v.root is None]
     common = Path(os.path.commonpath(loose)) if loose else None
-    names = [v.path.relative_to(v.root) if v.root is not None else video_key(v.path).relative_to(common)
-             for v in videos]
-    roots_of: dict[Path, set] = {}
-    for v, name in zip(videos, names):
-        if v.root is not None:
-            roots_of.setdefault(name, set()).add(v.root)
-    shared = set().union(*(roots for roots in roots_of.values() if len(roots) > 1))
-    return [Path(v.root.name) / name if v.root in shared else name for v, name in zip(videos, names)]
+    several = len({v.root for v in videos if v.root is not None}) > 1
+    # The folder's own name, however it was given ('.', '..', 'day1/'): never a step out of --out-dir.
+    return [(Path(Path(os.path.abspath(v.root)).name) if several else Path()) / v.path.relative_to(v.root)
+            if v.root is not None else video_key(v.path).relative_to(common) for v in videos]
 
 
 def video_output_candidates(video_out: Path) -> list[Path]:
@@ -431,8 +426,8 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         Frames per second of every video instead of its own (for image sequences, which have none).
     out_dir : path
         Outputs go to ``out_dir/<path relative to the input folder>/<stem>.lptrack.{mp4,csv}``; a file name
-        shared by two inputs (``a.mp4`` and ``a.avi``) keeps its extension instead: ``a.mp4.lptrack.csv``; input
-        folders that hold the same relative paths are mirrored under their own names (``day1/cam.lptrack.csv``).
+        shared by two inputs (``a.mp4`` and ``a.avi``) keeps its extension instead: ``a.mp4.lptrack.csv``; with
+        several input folders, each is mirrored under its own name (``day1/cam.lptrack.csv``).
     video : bool
         Write annotated videos.
     stream : bool

@@ -117,30 +117,10 @@ def _image_frames(files, fps: float):
 
 
 def _video_frames(path: Path):
-    try:  # the project's reader when present (timestamps, error messages); a plain loop otherwise
-        from .video import VideoReader
-    except ImportError:
-        VideoReader = None
-    if VideoReader is not None:
-        with VideoReader(path) as reader:
-            yield from reader
-        return
-    import cv2
+    from .video import VideoReader
 
-    cap = cv2.VideoCapture(str(path))
-    if not cap.isOpened():
-        raise VideoError(f"cannot open video '{path}'; expected a readable video file")
-    fps = cap.get(cv2.CAP_PROP_FPS) or IMAGE_FPS
-    try:
-        index = 0
-        while True:
-            ok, frame = cap.read()
-            if not ok:
-                break
-            yield index, index / fps, frame
-            index += 1
-    finally:
-        cap.release()
+    with VideoReader(path) as reader:
+        yield from reader
 
 
 def _natural_key(path: Path):

@@ -55,7 +55,7 @@ import numpy as np
 
 from .errors import LptrackError
 from .geometry import Ellipse, ellipse_in_rotated_rect
-from .results import STATUSES
+from .results import off_contract
 
 #: IoU thresholds of the OTB success plot.
 IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
@@ -641,13 +641,13 @@ def read_track_csv(path) -> Track:
                                f"{frames[back[0]]}; a run's frames increase")
     status = [(r.get("status") or "tracked").strip() for r in rows]
     # The metrics use neither, but a status or score outside the contract is a file that went wrong (a typo, a
-    # column shifted), as plot and sheet say too.
-    for line, value, level, text in zip(lines, status, score, (r.get("score") for r in rows)):
-        if value not in STATUSES:
-            raise GroundTruthError(f"run CSV '{path}' line {line}: status '{value}' is not one of "
-                                   f"{', '.join(STATUSES)}")
-        if not 0.0 <= level <= 1.0 and not math.isnan(level):
-            raise GroundTruthError(f"run CSV '{path}' line {line}: score '{text}' is not in [0, 1]")
+    # column shifted), as plot and sheet say too; an empty score (another tool's file) may stand.
+    for line, row, value, level in zip(lines, rows, status, score):
+        broken = off_contract(value, level)
+        if broken is not None:
+            column, what = broken
+            text = value if column == "status" else row.get("score")
+            raise GroundTruthError(f"run CSV '{path}' line {line}: {column} '{text}' is not {what}")
     return Track(frames, ell, scale, rot, score, status)
 
 

@@ -79,6 +79,19 @@ class Ellipse:
         """This ellipse with a new centre, semi-axes multiplied by ``scale``, turned by ``rotation_deg`` (CCW)."""
         return Ellipse(cx, cy, self.a * scale, self.b * scale, self.angle_deg + rotation_deg)
 
+    def axis_a_nearest_x(self) -> "Ellipse":
+        """The same ellipse written with its axis ``a`` within 45 degrees of +x (``angle_deg`` in (-45, 45]): one
+        of the four ways to write it (either axis as ``a``, each way round). This ellipse itself where it is so
+        already."""
+        if -45.0 < self.angle_deg <= 45.0:
+            return self
+        angle = self.angle_deg % 180.0  # [0, 180): an axis turned half a turn is the same axis
+        if angle > 135.0:
+            return Ellipse(self.cx, self.cy, self.a, self.b, angle - 180.0)
+        if angle > 45.0:
+            return Ellipse(self.cx, self.cy, self.b, self.a, angle - 90.0)
+        return Ellipse(self.cx, self.cy, self.a, self.b, angle)
+
     def axis_direction(self) -> tuple[float, float]:
         """Unit vector of axis ``a`` in pixel coordinates (y down)."""
         t = math.radians(self.angle_deg)

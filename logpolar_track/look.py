@@ -39,7 +39,7 @@ from .draw import LOST_COLOUR, TRACKED_COLOUR, draw_state
 from .errors import FrameRangeError, OutputError, RoiError, UsageError, VideoError, counted
 from .evaluate import GroundTruthError, Track, read_data_file, rotation_errors, scale_errors, score_track
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
-from .results import COLUMNS, STATUSES, FrameResult
+from .results import COLUMNS, FrameResult, off_contract
 from .trackers.base import TrackState
 from .video import (VideoReader, check_output_path, guess_image_sequence, opencv_path, temporary_path,
                     video_stem)
@@ -591,16 +591,15 @@ def read_run_csv(path) -> RunTable:
                 raise bad(column, "a number") from None
             if not math.isfinite(value) or (column in ("a", "b") and value <= 0):
                 raise bad(column, "a finite number" + (" > 0" if column in ("a", "b") else ""))
-            if column == "score" and not 0.0 <= value <= 1.0:
-                raise bad(column, "in [0, 1]")
             table[column].append(value)
         rot = fields["rotation_deg"]
         try:
             table["rotation_deg"].append(float(rot) if rot else math.nan)
         except ValueError:
             raise bad("rotation_deg", "a number or empty") from None
-        if fields["status"] not in STATUSES:
-            raise bad("status", f"one of {', '.join(STATUSES)}")
+        broken = off_contract(fields["status"], table["score"][-1])
+        if broken is not None:
+            raise bad(*broken)
         table["status"].append(fields["status"])
     t = {c: np.asarray(v, float) for c, v in table.items() if c not in ("frame", "status")}
     return RunTable(np.asarray(table["frame"], int), t["time_s"],

@@ -722,7 +722,8 @@ class VideoWriter:
         OpenCV's writer reports no failed write: a disk that fills up mid-run leaves an MP4 without its index
         ("moov atom not found") or an AVI whose header says it holds no frames (FFmpeg still seeks in it, to
         what is there), which must not be renamed into place as if finished. A file cut short elsewhere fails to
-        seek to its last frame. Costs one seek and one frame's decoding.
+        seek to its last frame. Costs one seek and the decoding of up to a key-frame interval (0.03 s for 1,500
+        frames of mp4v or MKV, 0.14 s for WebM).
         """
         with _fd2_silenced():
             capture = cv2.VideoCapture(str(self._temp))
@@ -732,8 +733,9 @@ class VideoWriter:
                 last = opened and capture.set(cv2.CAP_PROP_POS_FRAMES, self.frames_written - 1) and capture.grab()
             finally:
                 capture.release()
-        # One frame less than written is allowed in the count, which a container may estimate from the duration.
-        short = count < self.frames_written - 1
+        # One frame less than written is allowed in the count, which a container may estimate from the duration
+        # (but not none of a frame or more: a full disk's AVI says 0).
+        short = count < max(self.frames_written - 1, 1)
         if not (last and not short):
             read = (f"holds {max(count, 0)} frames by its header" if opened and short
                     else "cannot be read to its last frame" if opened else "cannot be read back")

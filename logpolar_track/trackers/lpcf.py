@@ -377,11 +377,6 @@ class LogPolarCorrelationTracker(SimilarityTracker):
 
     # -- set-up -----------------------------------------------------------------------------------------
     def _start(self, frame: np.ndarray, roi: Ellipse) -> None:
-        # One ellipse has four spellings (either axis as a, each way round); they are tracked alike, as the one
-        # whose axis a lies within 45 degrees of +x. (A tall box's ellipse written a >= b, as `lptrack roi` prints
-        # it, was sampled on a grid turned by 90 degrees: the same numbers up to rounding, which a hard sequence
-        # amplifies: crossing 0.775 against the benchmark's 0.787.) The reported ellipse stays the ROI as given.
-        roi = _axis_a_nearest_x(roi)
         # Patches are sampled along the ellipse's own axes: upright, a tilted thin ellipse's patch (its upright
         # bounding box, doubled) was mostly background, and an 80 x 12 px one at 30 degrees was lost at once (6 of 8
         # such runs tracked now; the real sequences' 10-start mean IoU AUC 0.470 -> 0.471, bag, tilted 30 degrees,
@@ -471,6 +466,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self._scale_filter.learn(self._scale_rows(frame, first, 1.0))
         self.lp_model = self._log_polar(frame, first)
         self.appearance = None
+        #: Too thin for the gradient refinement (see _REFINE_MIN_SEMI_AXIS), whatever refine_steps says.
+        self._sliver = min(roi.a, roi.b) / self.step < _REFINE_MIN_SEMI_AXIS
         self._refine_wait = 0  # frames left before the refinement is tried again
         if self.refine_steps:
             self._start_appearance(frame, roi, first)
@@ -631,9 +628,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             # sample): the first frame's filter's peak over it.
             long_term_peak = float(self.spectra.correlate(self._long_term_parts, self._last_sample[2]).max())
             # An estimate reported lost for long with no search under way (no drop) is not taken as recognised
-            # either, whatever the first frame's filter answers there: a static background that its padding took in
-            # can answer it as well as the object did (an object fading out slowly left the estimate on that
-            # background, never searched for).
+            # either, whatever the first frame's filter answers there, so that it is searched for: a static
+            # background that its padding took in can answer it as well as the object did (an object fading out
+            # slowly left the estimate on that background, never searched for). Learning still follows the peak
+            # alone (see below).
             self._lost_run = self._lost_run + 1 if match < self.lost_threshold and self.misses == 0 else 0
             recognised = long_term_peak >= _LONG_TERM_WEAK and self._lost_run < _LONG_TERM_LOST_RUN
             self._long_term_weak = 0 if recognised or recognised_elsewhere else self._long_term_weak + 1
@@ -680,7 +678,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         # that is believed in full (``trust_high``) does (a 100 x 15 px ellipse shrinking to half was reported at
         # 0.915 of its size by the scale filter, whose box of a sliver is mostly its surround; 0.501 by its own).
         size_believed = ((distance is not None and distance < self.refine_max_distance)
-                         or (self.appearance is None and lp_height >= self.trust_high))
+                         or (self._sliver and lp_height >= self.trust_high))
         shown = refined
         if self._scale_filter is not None:
             shown = self._shown_size(frame, refined, size_believed)
@@ -713,7 +711,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self._last_speed = min(speed, reach)
         self.match_level += self.level_rate * (match - self.match_level)
         # Not where the long-term model does not recognise the estimate: the short-term models would learn what
-        # the object is no longer (the 13 starts: 0.4775 against 0.4744 learning regardless, prototype).
+        # the object is no longer (the 13 starts: 0.4775 against 0.4744 learning regardless, prototype). Judged on
+        # its peak alone: also refusing the frames that a long lost run counts as not recognised (see
+        # _LONG_TERM_LOST_RUN; sharp enough to learn though lost) measured 0.4865 against 0.4902 (from the box
+        # 0.5634 against 0.5909, freeman1 0.298 against 0.471).
         if psr >= self.psr_learn and (long_term_peak is None or long_term_peak >= _LONG_TERM_WEAK):
             self._learnable += 1
             if self._learnable >= self.learn_every:
@@ -1040,7 +1041,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         nx = _even(2 * half_w * _REFINE_EXTENT / self.step) + 2
         ny = _even(2 * half_h * _REFINE_EXTENT / self.step) + 2
         self.appearance_size = nx, ny
-        if min(roi.a, roi.b) / self.step < _REFINE_MIN_SEMI_AXIS:
+        if self._sliver:
             # A sliver of an ellipse (a 60 x 3 px ROI: under a sample across) gives the steps too little to stand
             # on (seen 318 px off where the filter alone stayed within 6 px): no refinement for it.
             return
@@ -2027,19 +2028,6 @@ class MaskedLogPolarCorrelationTracker(LogPolarCorrelationTracker):
         # Colour pulls a partly covered object towards its visible part (see ``colour_weight``), which is what
         # the mask is for.
         super().__init__(occlusion_mask=occlusion_mask, colour_weight=colour_weight, **params)
-
-
-def _axis_a_nearest_x(roi: Ellipse) -> Ellipse:
-    """The same ellipse as ``roi``, written with its axis ``a`` within 45 degrees of +x (angle in (-45, 45]);
-    ``roi`` itself where it is so already."""
-    if -45.0 < roi.angle_deg <= 45.0:
-        return roi
-    angle = roi.angle_deg % 180.0  # [0, 180): an axis turned half a turn is the same axis
-    if angle > 135.0:
-        return Ellipse(roi.cx, roi.cy, roi.a, roi.b, angle - 180.0)
-    if angle > 45.0:
-        return Ellipse(roi.cx, roi.cy, roi.b, roi.a, angle - 90.0)
-    return Ellipse(roi.cx, roi.cy, roi.a, roi.b, angle)
 
 
 def _in_colour(frame: np.ndarray) -> bool:

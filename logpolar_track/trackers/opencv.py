@@ -28,6 +28,7 @@ import math
 import numpy as np
 
 from ..geometry import Ellipse
+from ..logpolar import within_0_255
 from .base import Tracker, TrackState, check_frame, check_ranges, check_start, frame_layout, register
 
 _CONTRIB_HINT = ("needs opencv-contrib-python-headless instead of opencv-python-headless "
@@ -116,7 +117,7 @@ def _bgr(frame: np.ndarray) -> np.ndarray:
     import cv2
 
     if frame.dtype != np.uint8:
-        frame = np.clip(np.rint(frame), 0, 255).astype(np.uint8)
+        frame = np.rint(within_0_255(frame)).astype(np.uint8)
     if frame.ndim == 3 and frame.shape[2] == 1:
         frame = frame[:, :, 0]
     if frame.ndim == 2:

@@ -105,7 +105,8 @@ class VideoOutcome:
     ``status`` is ``ok``, ``failed`` (``reason`` says why) or ``skipped`` (its outputs existed). ``frames``
     counts tracked frames; ``expected_frames`` is what the container announced, and ``truncated`` says that
     fewer came (:attr:`RunSummary.truncated <logpolar_track.pipeline.RunSummary.truncated>`). ``fps_assumed``
-    is the frame rate assumed for a source that reports none (an image sequence without ``fps``), else None.
+    is the frame rate assumed for a source that reports none (an image sequence, when no ``fps`` was given), else
+    None.
     """
 
     label: str

@@ -349,6 +349,11 @@ def _connect(client_class, scheduler: str):
         retried for its whole timeout), something that is not a Dask scheduler does (an HTTP server: Dask waited
         for its handshake for ever), or Dask could not connect (a ``tls://`` address without Dask's TLS settings
         raised a TypeError).
+
+    Notes
+    -----
+    The first check opens and closes a plain TCP connection, which a scheduler logs as a connection closed before
+    its handshake; the host's name lookup is not bounded by :data:`SCHEDULER_CONNECT_S`.
     """
     address = str(scheduler)
     host, _, port = address.split("://", 1)[-1].rpartition(":")
@@ -360,12 +365,17 @@ def _connect(client_class, scheduler: str):
                 raise LptrackError(f"cannot reach the Dask scheduler '{scheduler}': {describe_exception(exc)}") \
                     from None
     made: dict[str, Any] = {}
+    abandoned = threading.Event()
 
     def make() -> None:
         try:
-            made["client"] = client_class(scheduler, timeout=f"{SCHEDULER_ANSWER_S:g}s", set_as_default=False)
+            client = client_class(scheduler, timeout=f"{SCHEDULER_ANSWER_S:g}s", set_as_default=False)
         except BaseException as exc:  # noqa: BLE001 - handed over to the caller's thread below
             made["error"] = exc
+            return
+        made["client"] = client
+        if abandoned.is_set():  # connected after the caller gave up: nobody will close it
+            client.close()
 
     # In a thread of its own, so that a peer that never answers (Dask waited for its handshake without end) is
     # given up on, and Ctrl-C is heard meanwhile.
@@ -374,11 +384,14 @@ def _connect(client_class, scheduler: str):
     deadline = 1.5 * SCHEDULER_ANSWER_S  # Dask's own timeout first, where it comes
     thread.join(deadline)
     if thread.is_alive():
+        abandoned.set()
         raise LptrackError(f"the Dask scheduler '{scheduler}' did not answer within {deadline:g} s (is it a Dask "
                            f"scheduler's address?)")
     error = made.pop("error", None)
     if error is None:
         return made["client"]
+    if not isinstance(error, (ValueError, OSError, TimeoutError, TypeError)):
+        raise error  # not a failure to connect (an lptrack bug, MemoryError): as it is
     malformed = isinstance(error, ValueError)  # the address itself
     message = str(error) if malformed else describe_exception(error)
     # A Client that failed half-made lingers in reference cycles (and in the exception's traceback). Left to the

@@ -163,8 +163,8 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None, f
             return read_frame(path, n - 1, fps=fps)
         asked, valid = f"frame {index}", f"a frame from 0 to {n - 1}"
         if time_s is not None:  # a time was asked for: say which times there are too (roi takes no time)
-            asked, valid = f"time {time_s:g} s (frame {index} at {rate:g} fps)", f"{valid} or a time before " \
-                                                                                f"{n / rate:.3f} s"
+            asked = f"time {time_s:g} s (frame {index} at {rate:g} fps)"
+            valid += f" or a time before {n / rate:.3f} s"
         raise FrameRangeError(f"{asked} lies past the end of '{path}', which has {counted(n, 'frame')}: give "
                               f"{valid}") from None
     with reader:

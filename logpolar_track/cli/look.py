@@ -7,7 +7,6 @@ stderr; errors are one ``lptrack: error:`` line.
 from __future__ import annotations
 
 import shlex
-
 from pathlib import Path
 
 import click

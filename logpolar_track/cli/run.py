@@ -314,7 +314,7 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
         click.echo(f"lptrack: note: the ROI came from {video.name}'s .roi file and was applied to start frame "
                    f"{start_frame}", err=True)
     if summary.video_fps_guessed:
-        click.echo(f"lptrack: warning: {_rate_assumed(f'{video}', summary.video_fps, summary.video_out is not None)}",
+        click.echo(f"lptrack: warning: {_rate_assumed(str(video), summary.video_fps, summary.video_out is not None)}",
                    err=True)
     if summary.truncated:
         click.echo(f"lptrack: warning: {_truncation(video.name, summary.frames, summary.expected_frames)}",

@@ -439,6 +439,10 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         redo the others, replacing whatever part of their outputs exists.
     """
     check_fps(fps)
+    if not all(isinstance(tuning, Mapping) for tuning in (tracker_params or {}).values()):
+        # {'padding': 1.5} (run_video's form) would be read as a tracker named 'padding' and dropped in silence.
+        raise UsageError(f"tracker_params maps tracker names to their tuning, e.g. {{'lpcf': {{'padding': 1.5}}}}; "
+                         f"got {dict(tracker_params)!r}")
     entries = {video_key(e.video): e for e in roi_entries}
     if not videos:
         videos = [VideoInput(e.video) for e in entries.values()]

@@ -302,6 +302,14 @@ def test_bad_param_stops_a_batch_before_any_video(work):
     assert result.stderr.startswith("lptrack: error: no parameter 'learning_rate' in fixed: fixed takes window (11)")
 
 
+def test_tracker_params_in_run_videos_form_are_refused_not_dropped(work):
+    """plan_batch takes ``{tracker: {keyword: value}}``; run_video's ``{keyword: value}`` was read as tuning for a
+    tracker named 'padding' and dropped in silence."""
+    with pytest.raises(UsageError, match=r"tracker_params maps tracker names to their tuning, e\.g\. "
+                                         r"\{'lpcf': \{'padding': 1\.5\}\}; got \{'padding': 1\.5\}"):
+        plan_batch(find_videos(["footage/day1"]), tracker_params={"padding": 1.5})
+
+
 def test_video_jobs_stay_hashable_with_tracker_params(work):
     plan = plan_batch(find_videos(["footage/day1"]), roi=Ellipse.circle(80, 60, 20), out_dir="out",
                       tracker_params={"lpcf": {"learning_rate": 0.05}})

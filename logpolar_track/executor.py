@@ -382,9 +382,14 @@ def _connect(client_class, scheduler: str):
     thread = threading.Thread(target=make, name="lptrack-dask-connect", daemon=True)
     thread.start()
     deadline = 1.5 * SCHEDULER_ANSWER_S  # Dask's own timeout first, where it comes
-    thread.join(deadline)
+    try:
+        thread.join(deadline)
+    finally:  # given up on (or Ctrl-C): a client made from here on, or just made, is closed
+        if thread.is_alive():
+            abandoned.set()
+            if "client" in made:
+                made["client"].close()
     if thread.is_alive():
-        abandoned.set()
         raise LptrackError(f"the Dask scheduler '{scheduler}' did not answer within {deadline:g} s (is it a Dask "
                            f"scheduler's address?)")
     error = made.pop("error", None)

@@ -18,7 +18,10 @@ ROI's own ellipse (its angle kept) moved by as much as the box's centre moved an
 ``scale = sqrt(w*h) / sqrt(w0*h0)`` against the initial box, so the first state is the ROI itself;
 ``rotation_deg = None``; and ``score`` 1.0 when OpenCV says ok, else 0.0 (OpenCV gives no confidence). MIL says
 ok even when the target is gone; KCF and CSRT can report a loss. ``init`` seeds OpenCV's random number
-generator (keyword ``seed``, default 0) so that runs are repeatable: MIL draws random samples.
+generator (keyword ``seed``, default 0): MIL draws random samples, and its runs then repeat from process to process
+(the benchmark runs each in a fresh one), but not within one process: in OpenCV 5.1 a second MIL run there can end
+a pixel or a few away from the first (state OpenCV keeps beyond the seed). A ROI hanging over the frame's edge
+starts them on its box cut to the frame.
 """
 
 from __future__ import annotations
@@ -73,13 +76,17 @@ class _OpenCVTracker(Tracker):
         frame = np.asarray(frame)
         check_start(frame, roi)
         x, y, w, h = roi.bounding_box()
-        # OpenCV takes an integer box; round the corners so the box stays centred on the ROI.
-        x0, y0 = int(round(x)), int(round(y))
-        box = (x0, y0, max(int(round(x + w)) - x0, 1), max(int(round(y + h)) - y0, 1))
+        # OpenCV takes an integer box; round the corners so the box stays centred on the ROI. A ROI may hang
+        # over the frame's edge (half of it inside is enough): the box is cut to the frame, which MIL needs (a box
+        # beyond the edge ended it with std::bad_alloc, or an assertion near a corner).
+        width, height = frame.shape[1], frame.shape[0]
+        x0, y0 = min(max(int(round(x)), 0), width - 1), min(max(int(round(y)), 0), height - 1)
+        x1, y1 = min(int(round(x + w)), width), min(int(round(y + h)), height)
+        box = (x0, y0, max(x1 - x0, 1), max(y1 - y0, 1))
         import cv2
 
-        # MIL samples with OpenCV's per-thread RNG; a fixed seed makes runs repeatable (and the same in a
-        # worker process as in the main one), so benchmark numbers do not depend on what ran before.
+        # A fixed seed of OpenCV's per-thread RNG, which MIL samples with: runs repeat from process to process (see
+        # the module's notes for within one).
         cv2.setRNGSeed(self.seed)
         self._tracker = self._create()
         self._tracker.init(_bgr(frame), box)

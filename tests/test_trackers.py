@@ -419,3 +419,52 @@ def test_create_tracker_reports_any_bad_keyword_as_a_usage_error():
         create_tracker("fixed", window=float("inf"))  # int(inf): OverflowError in the constructor
     with pytest.raises(UsageError, match="bad parameters for tracker 'lpcf'"):
         create_tracker("lpcf", padding="wide")  # float('wide'): ValueError in the constructor
+
+
+@pytest.mark.parametrize("name", THESIS)
+def test_thesis_trackers_turn_less_than_half_a_turn_a_frame(name):
+    """The search and the re-sampling each read a turn within half a turn; together they read up to a whole turn
+    in one frame (a plain disc, whose every angle matches alike, jumped from 90 to 445 degrees). A frame's turn
+    is taken within half a turn, so the cumulative rotation stays continuous."""
+    roi = Ellipse.circle(160, 120, 30)
+    poses = [Pose(160 + 1.5 * k, 120 + 0.5 * k, 1.01 ** k, 3.0 * k) for k in range(25)]
+    background, disc = np.full((240, 320, 3), 50, np.uint8), np.full((75, 75, 3), 200, np.uint8)
+    frames = [render_frame(background, disc, roi, pose) for pose in poses]
+    tracker = create_tracker(name)
+    rotations = [tracker.init(frames[0], roi).rotation_deg]
+    rotations += [tracker.update(frame)[1].rotation_deg for frame in frames[1:]]
+    assert np.abs(np.diff(rotations)).max() <= 180.0
+
+
+def test_an_estimate_whose_centre_left_the_frame_is_lost():
+    """``spatial`` followed a disc out of the frame by matching the replicated border, tracked at 0.7 with its
+    centre 90 px beyond the edge: an estimate outside the frame is lost, and the last good one is reported. (What
+    it finds afterwards near the edge, a smooth background matching its template at 0.8, it reports tracked: it
+    has no other judge of a match.)"""
+    rng = np.random.default_rng(0)
+    roi = Ellipse.circle(60, 60, 25)
+    background, texture = random_texture(120, 160, rng), random_texture(61, 61, rng)
+    poses = [Pose(60 - 4.0 * k, 60 - 3.0 * k, 1.0, 0.0) for k in range(30)]
+    frames = [render_frame(background, texture, roi, pose) for pose in poses]
+    tracker = create_tracker("spatial")
+    tracker.init(frames[0], roi)
+    lost = 0
+    for frame in frames[1:]:
+        ok, state = tracker.update(frame)
+        if ok:
+            assert 0 <= state.ellipse.cx <= 159 and 0 <= state.ellipse.cy <= 119
+        lost += not ok
+    assert lost > 0
+
+
+def test_an_opencv_tracker_starts_on_a_roi_hanging_over_the_edge():
+    """A ROI half inside the frame is accepted; MIL was given its box beyond the edge and ended with
+    std::bad_alloc (or an assertion near a corner). The box is cut to the frame."""
+    rng = np.random.default_rng(0)
+    frame = random_texture(240, 320, rng)
+    for roi in (Ellipse.circle(25, 120, 30), Ellipse.circle(295, 120, 30), Ellipse.circle(160, 5, 20),
+                Ellipse.circle(2, 2, 3)):
+        tracker = create_tracker("cv-mil")
+        assert tracker.init(frame, roi).ellipse == roi
+        ok, state = tracker.update(frame)
+        assert ok and math.hypot(state.ellipse.cx - roi.cx, state.ellipse.cy - roi.cy) < 3.0

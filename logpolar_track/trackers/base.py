@@ -123,14 +123,21 @@ class SimilarityTracker(Tracker):
         frame = np.asarray(frame)
         check_frame(frame, self.frame_size, self.frame_layout)
         estimate = self._estimate(self._prepared(frame), self.last)
+        # An estimate whose centre left the frame is lost whatever it scored: the search there matched the frame's
+        # replicated border (``spatial`` followed an object out of view, tracked at 0.7, 90 px beyond the edge).
         ok = (estimate is not None and estimate.score >= self.lost_threshold and _finite(estimate)
-              and not self._searching())
+              and self._inside(estimate) and not self._searching())
         if ok:
             self.last = estimate
             self._accept(estimate)
             return True, self._state(estimate)
         score = 0.0 if estimate is None or not math.isfinite(estimate.score) else estimate.score
         return False, self._state(self.last, score=score)
+
+    def _inside(self, estimate: Similarity) -> bool:
+        """Whether the estimate's centre is within the frame (its outermost pixel centres)."""
+        width, height = self.frame_size
+        return 0.0 <= estimate.cx <= width - 1 and 0.0 <= estimate.cy <= height - 1
 
     def _prepared(self, frame: np.ndarray) -> np.ndarray:
         return frame if self.gray_dtype is None else to_gray(frame, self.gray_dtype)

@@ -20,11 +20,12 @@ reference the tests compare against.
 from __future__ import annotations
 
 import math
+from abc import abstractmethod
 
 import numpy as np
 
 from ..errors import UsageError
-from ..geometry import Ellipse
+from ..geometry import Ellipse, wrap_degrees
 from ..logpolar import LogPolarGrid, PhaseCorrelator, Peak, find_peaks, parabola_peak_2d
 from .base import MAX_WINDOW, Similarity, SimilarityTracker, check_ranges, register
 
@@ -148,6 +149,18 @@ class _WindowSearch(SimilarityTracker):
         #: Each cell's four neighbours along the axes, shape ``(cells, 4)`` (-1 outside the window).
         self.cell_neighbours = np.stack(neighbours, axis=1)
 
+    def _estimate(self, gray: np.ndarray, last: Similarity) -> Similarity:
+        found = self._locate(gray, last)
+        # The search and the re-sampling each read a turn within half a turn, so together up to a whole turn in
+        # one frame (a 180-degree symmetric object read -178 twice, 356 degrees, for a 2-degree turn): the pose is
+        # the same with the frame's turn taken within half a turn, which keeps the cumulative rotation continuous.
+        turn = wrap_degrees(found.rotation_deg - last.rotation_deg)
+        return Similarity(found.cx, found.cy, found.scale, last.rotation_deg + turn, found.score)
+
+    @abstractmethod
+    def _locate(self, gray: np.ndarray, last: Similarity) -> Similarity:
+        """The frame's estimate, from the last good one (its turn is taken within half a turn afterwards)."""
+
     def _matchers(self, a: float, b: float) -> tuple[LogPolarMatcher, LogPolarMatcher | None]:
         """Full-size matcher, and the half-size one used to score the window when ``coarse`` is on."""
         full = LogPolarMatcher(a, b, n_rho=self.n_rho, n_theta=self.n_theta)
@@ -268,7 +281,7 @@ class FixedTemplateTracker(_WindowSearch):
             results.append(self._finish(gray, last, peaks[best], offset, template))
         return results
 
-    def _estimate(self, gray: np.ndarray, last: Similarity) -> Similarity:
+    def _locate(self, gray: np.ndarray, last: Similarity) -> Similarity:
         if not self.coarse:
             return self._search(gray, last)
         return self._coarse_to_fine(gray, last, [(self.matcher.template, self.coarse_matcher.template)])[0]
@@ -289,7 +302,7 @@ class DifferenceDecompositionTracker(_WindowSearch):
         if self.coarse_matcher is not None:
             self.coarse_shifted = self.coarse_matcher.spectra(gray, centres, 1.0, roi.angle_deg)
 
-    def _estimate(self, gray: np.ndarray, last: Similarity) -> Similarity:
+    def _locate(self, gray: np.ndarray, last: Similarity) -> Similarity:
         centre = np.array([[last.cx, last.cy]])
         current = self.matcher.spectra(gray, centre, last.scale, self._angle(last))
         if self.coarse:
@@ -344,7 +357,7 @@ class TemplateUpdateTracker(FixedTemplateTracker):
         self.coarse_current = None if self.coarse_matcher is None else self.coarse_matcher.template
         self._gray = gray
 
-    def _estimate(self, gray: np.ndarray, last: Similarity) -> Similarity:
+    def _locate(self, gray: np.ndarray, last: Similarity) -> Similarity:
         self._gray = gray
         if self.coarse:
             # Both templates are searched on the same samples: one coarse batch, shared full-size cells.
@@ -418,7 +431,7 @@ class TwoTemplateTracker(_WindowSearch):
         rotation = sum(wi * c[1] for wi, c in zip(w, changes)) / w.sum()
         return math.exp(log_scale), rotation
 
-    def _estimate(self, gray: np.ndarray, last: Similarity) -> Similarity:
+    def _locate(self, gray: np.ndarray, last: Similarity) -> Similarity:
         centres = np.array([last.cx, last.cy], np.float32) + self.offsets
         if self.coarse:
             coarse = (self.coarse_inner, self.coarse_outer)

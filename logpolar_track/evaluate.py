@@ -380,17 +380,27 @@ def ground_truth_from_ellipses(ellipses: np.ndarray, scale: np.ndarray | None = 
     """Ground truth from ellipses ``(n, 5)`` ``(cx, cy, a, b, angle_deg)`` as in a ``.gt.csv``.
 
     ``scale`` and ``rotation_deg`` default to (and are filled where NaN from) the semi-axes' size ratio and
-    the angle change since the first valid row.
+    the angle change since the first valid row. An ellipse's angle says its turn only modulo 180 degrees (it is
+    the same ellipse half a turn round): the angles are unwrapped (assuming less than 90 degrees of turn between
+    consecutive rows that have one), and rotation is then scored modulo 180, unless ``rotation_deg`` gives
+    every valid row's cumulative turn (scored in full, a missed turn costing 360).
     """
     e = np.asarray(ellipses, float).reshape(-1, 5)
     boxes = np.column_stack([e[:, 0], e[:, 1], 2 * e[:, 2], 2 * e[:, 3], e[:, 4]])
     gt = GroundTruth(boxes, True, np.ones(len(e)), rotation_period=360.0, ellipses=e, source="lptrack")
     valid = gt.valid
     size_scale = _relative(np.sqrt(e[:, 2] * e[:, 3]), valid, ratio=True)
-    angle_rot = _relative(e[:, 4].copy(), valid, ratio=False)
+    angles = e[:, 4].copy()
+    known = valid & np.isfinite(angles)
+    # Written within (-180, 180] as the run CSV does, an ellipse spinning past 180 jumped by 360 (a perfect track
+    # scored 360 degrees off).
+    angles[known] = np.unwrap(angles[known], period=180.0)
+    angle_rot = _relative(angles, valid, ratio=False)
     gt.scale = size_scale if scale is None else np.where(np.isfinite(scale), scale, size_scale)
-    gt.rotation_deg = angle_rot if rotation_deg is None else np.where(np.isfinite(rotation_deg),
-                                                                      rotation_deg, angle_rot)
+    given = np.zeros(len(e), bool) if rotation_deg is None else np.isfinite(rotation_deg)
+    gt.rotation_deg = np.where(given, np.nan if rotation_deg is None else rotation_deg, angle_rot)
+    if not given[valid].all():
+        gt.rotation_period = 180.0
     return gt
 
 

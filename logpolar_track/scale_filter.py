@@ -108,8 +108,12 @@ class ScaleFilter:
 
     def find(self, rows: np.ndarray) -> float:
         """The change of size (natural log) whose rows match the model best, to a fraction of a row (a parabola
-        through the peak and its neighbours; none at the first or last row)."""
-        _, row, _ = parabola_peak_2d(self.response(rows)[None, :])
+        through the peak and its neighbours; none at the first or last row). 0 where the response has no peak
+        (flat, or not finite: rows of a featureless or broken patch), which the first row's would otherwise be."""
+        response = self.response(rows)
+        if not np.isfinite(response).all() or response.max() <= response.min():
+            return 0.0
+        _, row, _ = parabola_peak_2d(response[None, :])
         return float((row - len(self.log_factors) // 2) * self.log_step)
 
 

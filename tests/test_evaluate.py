@@ -290,3 +290,29 @@ def test_run_data_reads_the_same_as_csv_or_json_lines(tmp_path):
     as_jsonl.write_text(json_line(rows[0]) + "not json\n")
     with pytest.raises(GroundTruthError, match="line 2 is not a JSON object"):
         read_track_csv(as_jsonl)
+
+
+def test_gt_csv_without_rotation_unwraps_the_angles_and_scores_them_modulo_half_a_turn(tmp_path):
+    """A ground truth spinning past 180 degrees, written within (-180, 180] and without the rotation column:
+    a perfect track scores no rotation error (the angles jumped by 360 and scored 360 off), and the column, where
+    given, is still scored in full."""
+    n = 60
+    turn = 8.0 * np.arange(n)  # to 472 degrees counter-clockwise
+    angle = (30.0 + turn + 180.0) % 360.0 - 180.0
+    rows = [f"{k},{100 + k},80,40,25,{float(angle[k])!r},1,{float(turn[k])!r}" for k in range(n)]
+    with_turn, without = tmp_path / "a.gt.csv", tmp_path / "b.gt.csv"
+    with_turn.write_text("frame,cx,cy,a,b,angle_deg,scale,rotation_deg\n" + "\n".join(rows) + "\n")
+    without.write_text("frame,cx,cy,a,b,angle_deg\n" + "\n".join(r.rsplit(",", 2)[0] for r in rows) + "\n")
+    ellipses = np.array([[100 + k, 80, 40, 25, 30 + turn[k]] for k in range(n)], float)
+    perfect = Track(np.arange(n), ellipses, np.ones(n), turn.copy(), np.ones(n), ["tracked"] * n)
+    # From frame 20 on, half a turn off (as a tracker fooled by a symmetric object would be).
+    half_turn_off = Track(np.arange(n), ellipses, np.ones(n), turn + 180.0 * (np.arange(n) >= 20), np.ones(n),
+                          ["tracked"] * n)
+    full, modulo = read_gt_csv(with_turn), read_gt_csv(without)
+    assert (full.rotation_period, modulo.rotation_period) == (360.0, 180.0)
+    np.testing.assert_allclose(modulo.rotation_deg, turn)
+    assert score_track(modulo, perfect)["rotation_error_median_deg"] == pytest.approx(0.0, abs=1e-9)
+    assert score_track(full, perfect)["rotation_error_median_deg"] == pytest.approx(0.0, abs=1e-9)
+    # Half a turn off is the same ellipse: no error modulo 180, the whole of it where the turn is known.
+    assert score_track(modulo, half_turn_off)["rotation_error_median_deg"] == pytest.approx(0.0, abs=1e-9)
+    assert score_track(full, half_turn_off)["rotation_error_median_deg"] == pytest.approx(180.0)

@@ -96,3 +96,12 @@ def test_bad_settings_say_what_is_accepted(kwargs, message):
 def test_response_before_learning_is_an_error():
     with pytest.raises(RuntimeError, match="before learn"):
         ScaleFilter().response(np.zeros((17, 4), np.float32))
+
+
+def test_a_response_with_no_peak_reads_no_change():
+    """Flat rows (a featureless patch) and NaN rows answer alike at every size: no change, not the smallest size
+    (the first row, which an argmax of equal values gives)."""
+    scale_filter = ScaleFilter()
+    scale_filter.learn(np.zeros((17, 100), np.float32))
+    assert scale_filter.find(np.zeros((17, 100), np.float32)) == 0.0
+    assert scale_filter.find(np.full((17, 100), np.nan, np.float32)) == 0.0

@@ -232,7 +232,9 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, ove
     a UAV123 <name>.txt, a sequence folder holding one of them, or a video
     (its <name>.gt.csv beside it, as in sample_videos/). Frames are
     matched by index (line k of a .txt file is frame k-1); the metrics are
-    those of 'lptrack bench' (see 'lptrack bench --help').
+    those of 'lptrack bench' (see 'lptrack bench --help'). A .gt.csv
+    without a rotation_deg column has its rotation scored modulo 180
+    degrees (an ellipse's angle repeats every half turn).
     """
     from ..datasets import load_ground_truth
     from ..evaluate import read_track_csv, score_track

@@ -468,3 +468,12 @@ def test_an_opencv_tracker_starts_on_a_roi_hanging_over_the_edge():
         assert tracker.init(frame, roi).ellipse == roi
         ok, state = tracker.update(frame)
         assert ok and math.hypot(state.ellipse.cx - roi.cx, state.ellipse.cy - roi.cy) < 3.0
+
+
+def test_an_opencv_tracker_that_cannot_start_on_the_roi_says_so_in_one_line():
+    """A box spanning the frame leaves MIL no negative samples: OpenCV's assertion became a traceback; it is a
+    RoiError (one line, exit 2 in the CLI) naming the box and the frame."""
+    frame = random_texture(240, 320, np.random.default_rng(0))
+    with pytest.raises(RoiError, match=r"cv-mil cannot start on the ROI's box \(250x240 px at 35,0\) in a 320x240 "
+                                       r"frame: OpenCV says \(-215:Assertion failed\)"):
+        create_tracker("cv-mil").init(frame, Ellipse.circle(160, 120, 125))

@@ -30,6 +30,7 @@ import math
 
 import numpy as np
 
+from ..errors import RoiError
 from ..geometry import Ellipse
 from ..logpolar import within_0_255
 from .base import Tracker, TrackState, check_frame, check_ranges, check_start, frame_layout, register
@@ -89,7 +90,14 @@ class _OpenCVTracker(Tracker):
         # the module's notes for within one).
         cv2.setRNGSeed(self.seed)
         self._tracker = self._create()
-        self._tracker.init(_bgr(frame), box)
+        try:
+            self._tracker.init(_bgr(frame), box)
+        except cv2.error as exc:
+            # MIL samples its negatives around the box: a box spanning the frame leaves none (an assertion).
+            reason = str(exc).strip().splitlines()[-1].strip().rpartition("error: ")[2]
+            raise RoiError(f"{self.name} cannot start on the ROI's box ({box[2]}x{box[3]} px at {box[0]},{box[1]}) "
+                           f"in a {width}x{height} frame: OpenCV says {reason}; give a smaller ROI, with room "
+                           "around it inside the frame") from None
         self._frame_size, self._frame_layout = (frame.shape[1], frame.shape[0]), frame_layout(frame)
         self._roi, self._box0 = roi, box
         self._size0 = math.sqrt(box[2] * box[3])

@@ -678,15 +678,23 @@ def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str]
     started = time.perf_counter()
     outcomes = dict(plan.settled)
     existing = {p for job in plan.jobs for p in plan.output_folders(job) if p.exists()}
-    if stream is not None and data_format == "csv":
-        stream.write(header_line(video=True))
+    # The header goes out with the first rows, or once the batch has run: a batch that stops before (a Dask
+    # scheduler that cannot be reached) leaves nothing on stdout.
+    header_due = stream is not None and data_format == "csv"
     next_out = 0
+
+    def write_header() -> None:
+        nonlocal header_due
+        if header_due:
+            stream.write(header_line(video=True))
+            header_due = False
 
     def flush_stream() -> None:
         nonlocal next_out
         while next_out < len(plan.order) and plan.order[next_out] in outcomes:
             rows = outcomes[plan.order[next_out]].rows
             if stream is not None and rows:
+                write_header()
                 stream.write(rows)
             next_out += 1
         if stream is not None:
@@ -727,6 +735,9 @@ def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str]
                 shown.finish(result.index, outcome)
                 on_progress(shown)
             flush_stream()
+        if stream is not None:
+            write_header()
+            stream.flush()
     finally:
         if stop_counting is not None:
             stop_counting.set()

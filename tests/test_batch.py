@@ -556,6 +556,9 @@ def test_a_scheduler_address_that_is_not_a_dask_scheduler_is_one_line(work, monk
             assert result.exit_code == 1, (address, result.stderr)
             lines = result.stderr.splitlines()
             assert len(lines) == 1 and lines[0].startswith("lptrack: error: ") and fragment in lines[0], lines
+        # Rows to stdout: not even the header goes out before the cluster is reached.
+        result = invoke("footage/day1", "--no-video", "--csv", "-", "--scheduler", f"tcp://127.0.0.1:{refused}")
+        assert result.exit_code == 1 and result.stdout == ""
     finally:
         silent.close()
     assert not (work / "out").exists()

@@ -196,6 +196,8 @@ def parse_roi(spec: str) -> Ellipse:
     if "" in fields and len(fields) > 1:
         raise RoiError(f"ROI '{spec}' has an empty field (a stray comma?); expected {ROI_SYNTAX}")
     try:
+        if any("_" in f for f in fields):  # float() takes 1_40 for 140: a typo, not a number
+            raise ValueError
         values = [float(f) for f in fields]
     except ValueError:
         raise RoiError(f"ROI '{spec}' is not a list of numbers; expected {ROI_SYNTAX}") from None
@@ -249,7 +251,10 @@ def ellipse_in_rotated_rect(cx: float, cy: float, w: float, h: float, angle_deg:
 
 def wrap_degrees(angle: float) -> float:
     """``angle`` wrapped into (-180, 180] degrees."""
-    wrapped = math.fmod(angle + 180.0, 360.0)
-    if wrapped <= 0:
+    # fmod first: it is exact, where adding 180 to a huge angle (1e20) rounds it (280 came out as 100).
+    wrapped = math.fmod(angle, 360.0)
+    if wrapped > 180.0:
+        wrapped -= 360.0
+    elif wrapped <= -180.0:
         wrapped += 360.0
-    return wrapped - 180.0
+    return wrapped

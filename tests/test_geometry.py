@@ -24,12 +24,13 @@ def test_parse_roi_accepts(spec, expected):
     ("", "is empty"),
     ("1,2,3,4", "has 4 numbers"),
     ("a,b,c", "not a list of numbers"),
+    ("1_40,120,30", "not a list of numbers"),
     ("1,2,nan", "non-finite"),
     ("1,2,inf", "non-finite"),
     ("10,10,0", "radius must be > 0"),
     ("10,10,-5", "radius must be > 0"),
     ("10,10,5,0,30", "semi-axes must be > 0"),
-], ids=["two", "empty", "four", "letters", "nan", "inf", "zero-r", "negative-r", "zero-b"])
+], ids=["two", "empty", "four", "letters", "underscore", "nan", "inf", "zero-r", "negative-r", "zero-b"])
 def test_parse_roi_rejects_with_message(spec, fragment):
     with pytest.raises(RoiError) as err:
         parse_roi(spec)
@@ -141,7 +142,8 @@ def test_contains_follows_rotation():
     assert roi.contains(0, -9) and not roi.contains(9, 0)
 
 
-@pytest.mark.parametrize("angle, wrapped", [(0, 0), (180, 180), (-180, 180), (190, -170), (720, 0), (-361, -1)])
+@pytest.mark.parametrize("angle, wrapped", [(0, 0), (180, 180), (-180, 180), (190, -170), (720, 0), (-361, -1),
+                                            (540, 180), (-540, 180), (1e20, 280 - 360), (-1e20, 360 - 280)])
 def test_wrap_degrees(angle, wrapped):
     assert wrap_degrees(angle) == pytest.approx(wrapped)
 

@@ -134,6 +134,15 @@ def video_stem(path) -> str:
     return stem or path.absolute().parent.name or "frames"
 
 
+def input_label(path) -> str:
+    """How messages name input ``path``: a video's file name; an image sequence's pattern with its folder
+    (``img/%04d.jpg``, where the pattern alone says little)."""
+    path = Path(path)
+    if is_image_sequence(path) and path.absolute().parent.name:
+        return f"{path.absolute().parent.name}/{path.name}"
+    return path.name
+
+
 def _check_input_path(path: Path) -> None:
     if _frame_number_field(path) is not None:
         # Whether any image matches is found when _open_capture lists the folder (once: it may be large).
@@ -243,10 +252,17 @@ def announced_frame_count(path) -> int:
     return int(count) if math.isfinite(count) and count > 0 else 0
 
 
+#: Frame rates (frames per second) lptrack takes: 1e-300 gave time_s of 300 digits, and an encoder that refused it
+#: was reported as "no codec could be opened".
+FPS_RANGE = (0.001, 1e6)
+
+
 def check_fps(fps: float | None) -> None:
-    """Refuse a frame rate that is given but not a positive finite number (frames per second)."""
-    if fps is not None and not (math.isfinite(fps) and fps > 0):
-        raise UsageError(f"the frame rate must be a positive number of frames per second, got {fps:g}")
+    """Refuse a frame rate that is given but not within :data:`FPS_RANGE` (frames per second)."""
+    low, high = FPS_RANGE
+    if fps is not None and not (math.isfinite(fps) and low <= fps <= high):
+        raise UsageError(f"the frame rate must be a positive number of frames per second, from {low:g} to "
+                         f"{high:,.0f}, got {fps:g}")
 
 
 def frames_to_track(frame_count: int, start_frame: int, max_frames: int | None) -> int | None:
@@ -747,9 +763,9 @@ class VideoWriter:
         self._closed = True
         try:
             # A stop signal may land in _open between the writer and its encoder being set: either may be unset.
-            if self._encoder is not None:
-                self._encoder.finish(discard=True)
-            if self._writer is not None:
+            # An encoder that did not stop is left with its writer: releasing the writer under it crashes.
+            stopped = self._encoder is None or self._encoder.finish(discard=True)
+            if self._writer is not None and stopped:
                 self._writer.release()
                 self._writer = None
         finally:  # even if a second Ctrl-C interrupts the wait for the encoder
@@ -764,6 +780,11 @@ class VideoWriter:
                 self.abort()
             except Exception:  # noqa: BLE001 - nothing can be reported from a finaliser
                 pass
+
+
+#: How often (seconds) a caller waiting for the encoder to stop wakes it again, and how long an abort waits for it.
+_WAKE_EVERY_S = 0.25
+_ABANDON_AFTER_S = 5.0
 
 
 class _Encoder:
@@ -805,13 +826,35 @@ class _Encoder:
         self._frames.join()
         self._frames.put(frame)
 
-    def finish(self, *, discard: bool = False) -> None:
-        """Encode the frame handed over (or drop it if ``discard``) and stop the thread; safe to repeat."""
+    def finish(self, *, discard: bool = False) -> bool:
+        """Encode the frame handed over (or drop it if ``discard``) and stop the thread; safe to repeat. Whether
+        the thread has stopped: with ``discard`` (an abort) it is waited for ``_ABANDON_AFTER_S`` at most, then
+        left (a daemon thread, ended with the process), so that a stop never hangs."""
         if discard:
             try:
                 self._frames.get_nowait()
             except queue.Empty:
                 pass
-        if not self.done.is_set():
-            self._frames.put(_END)  # waits for a frame still waiting to be taken
-            self.done.wait()
+        waited = 0.0
+        # Both waits wake the encoder again now and then: a stop signal raised in a thread inside the queue's
+        # hand-over (between an item going in and the encoder being told) can leave the encoder asleep beside its
+        # item, and `lptrack run` stopped by a signal hung in about 1 run in 25 (encoder in get(), caller here).
+        # Waking it when it is busy is harmless.
+        while not self.done.is_set():
+            try:
+                self._frames.put(_END, timeout=_WAKE_EVERY_S)
+                break
+            except queue.Full:
+                waited = self._wake(waited)
+                if discard and waited >= _ABANDON_AFTER_S:
+                    return False
+        while not self.done.wait(_WAKE_EVERY_S):
+            waited = self._wake(waited)
+            if discard and waited >= _ABANDON_AFTER_S:
+                return False
+        return True
+
+    def _wake(self, waited: float) -> float:
+        with self._frames.not_empty:
+            self._frames.not_empty.notify()
+        return waited + _WAKE_EVERY_S

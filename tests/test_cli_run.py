@@ -691,6 +691,8 @@ def test_an_image_sequence_runs_like_a_video(tiny_video, image_sequence, workdir
     assert (f"lptrack: warning: '{image_sequence}' reports no frame rate; assumed 25 fps for time_s (give --fps to "
             "set it)\n"
             in result.stderr)
+    # The summary names the pattern with its folder (the pattern alone says little).
+    assert "\nlptrack: shots/frame_%04d.png: 20 frames (0 lost) with lpcf" in result.stderr
 
 
 def test_an_image_sequence_reads_its_roi_sidecar_and_goes_through_a_batch(tiny_video, image_sequence, workdir):
@@ -741,11 +743,11 @@ def test_fps_sets_the_rate_of_an_image_sequence_and_overrides_a_videos(tiny_vide
     assert [float(r["time_s"]) for r in read_rows(result.stdout) if r["frame"] == "19"] == pytest.approx([1.9, 1.9])
 
 
-@pytest.mark.parametrize("rate", ["0", "-5", "nan", "inf"])
+@pytest.mark.parametrize("rate", ["0", "-5", "nan", "inf", "1e-300", "2e6"])
 def test_a_frame_rate_that_is_not_a_positive_number_is_refused(tiny_video, image_sequence, workdir, rate):
     for inputs in ((image_sequence,), (image_sequence, tiny_video.path)):
         result = invoke(*inputs, "--roi", "80,60,20", "--fps", rate)
         assert result.exit_code == 2
         assert result.stderr == (f"lptrack: error: the frame rate must be a positive number of frames per second, "
-                                 f"got {float(rate):g}\n")
+                                 f"from 0.001 to 1,000,000, got {float(rate):g}\n")
         assert listing(workdir) == []

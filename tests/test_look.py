@@ -538,4 +538,4 @@ def test_frame_command_on_an_image_sequence_takes_its_rate_from_fps(tiny_video, 
     assert (read_frame(pattern, time_s=0.5).fps_guessed, read_frame(pattern, time_s=0.5, fps=10).fps_guessed) == \
         (True, False)
     assert one_error_line(invoke("frame", pattern, "--fps", 0), 2) == \
-        "lptrack: error: the frame rate must be a positive number of frames per second, got 0"
+        "lptrack: error: the frame rate must be a positive number of frames per second, from 0.001 to 1,000,000, got 0"

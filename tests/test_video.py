@@ -275,6 +275,77 @@ def test_writer_interrupted_while_closing_never_releases_under_the_encoder(tmp_p
     assert list(tmp_path.iterdir()) == []
 
 
+def _asleep_in_get(encoder) -> None:
+    """Wait until the encoding thread sleeps in the queue's get()."""
+    for _ in range(1000):
+        if encoder._frames.not_empty._waiters:  # CPython's Condition keeps its sleepers there
+            return
+        time.sleep(0.01)
+    raise AssertionError("the encoding thread never waited for a frame")
+
+
+def _finishes(call) -> bool:
+    """Run ``call`` in a thread; whether it returned (within a minute: a hang must fail the test, not stall it)."""
+    worker = threading.Thread(target=call, daemon=True)
+    worker.start()
+    worker.join(60)
+    return not worker.is_alive()
+
+
+def test_an_encoder_not_told_of_its_frame_is_woken_by_finish(monkeypatch):
+    """A stop signal between a frame entering the queue and the encoder being told of it left the encoder asleep
+    beside its frame, and `lptrack run` stopped by a signal hung (about 1 run in 25): finish() wakes it again,
+    and the frame is encoded."""
+    monkeypatch.setattr(video_module, "_WAKE_EVERY_S", 0.05)
+    written = []
+
+    class Recorder:
+        def write(self, frame):
+            written.append(int(frame[0, 0, 0]))
+
+    encoder = video_module._Encoder(Recorder(), "test-encoder")
+    _asleep_in_get(encoder)
+    with encoder._frames.mutex:  # what Queue.put does, less the notify the signal cut off
+        encoder._frames._put(np.full((4, 4, 3), 7, np.uint8))
+        encoder._frames.unfinished_tasks += 1
+    stopped = []
+    assert _finishes(lambda: stopped.append(encoder.finish()))
+    assert stopped == [True] and written == [7] and encoder.done.is_set()
+
+
+def test_an_abort_gives_up_on_an_encoder_that_never_stops(tmp_path, monkeypatch):
+    """An encoder stuck in OpenCV's write is waited for a while, then left (a daemon thread): the abort returns,
+    does not release the writer under it (which crashes the process), and leaves no file."""
+    monkeypatch.setattr(video_module, "_WAKE_EVERY_S", 0.05)
+    monkeypatch.setattr(video_module, "_ABANDON_AFTER_S", 0.3)
+    writing, stuck, events = threading.Event(), threading.Event(), []
+
+    class StuckWriter:
+        def __init__(self, path, *args):
+            open(path, "wb").close()
+
+        def isOpened(self):
+            return True
+
+        def write(self, frame):
+            events.append("write")
+            writing.set()
+            stuck.wait()
+
+        def release(self):
+            events.append("release")
+
+    monkeypatch.setattr(video_module.cv2, "VideoWriter", StuckWriter)
+    writer = VideoWriter(tmp_path / "out.mp4", 25.0)
+    writer.write(np.zeros((48, 64, 3), np.uint8))
+    try:
+        assert writing.wait(60)
+        assert _finishes(writer.abort)
+        assert events == ["write"] and list(tmp_path.iterdir()) == []
+    finally:
+        stuck.set()
+
+
 def test_writer_encoder_failure_is_reported_and_leaves_nothing(tiny_video, tmp_path, monkeypatch):
     """An error inside the encoding thread surfaces in the caller as an OutputError; no file is left."""
     real_writer = cv2.VideoWriter

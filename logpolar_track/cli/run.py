@@ -24,7 +24,7 @@ from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, defau
                         run_video)
 from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
-from ..video import check_fps, guess_image_sequence, make_output_folder, remove_empty_folders
+from ..video import check_fps, guess_image_sequence, input_label, make_output_folder, remove_empty_folders
 from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, check_jobs_or_scheduler, main, parse_param_options,
                parse_roi_option, stdout_reader_left)
 
@@ -143,8 +143,8 @@ Examples:
 @click.option("--no-video", is_flag=True, help="Do not write annotated videos (faster).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 @click.option("--skip-existing", is_flag=True,
-              help="Leave alone videos whose outputs all exist; redo the others (resumes an interrupted "
-                   "batch).")
+              help="Leave alone videos whose outputs all exist and cover the frames asked for; redo (replace) "
+                   "the others (resumes an interrupted batch).")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=None, metavar="N",
               help="Videos tracked in parallel processes. Default: the number of cores.")
 @click.option("--scheduler", metavar="ADDRESS",
@@ -296,7 +296,7 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
                                                              source=video, start_frame=start_frame,
                                                              max_frames=max_frames):
         if show:
-            click.echo(f"lptrack: {video.name}: outputs exist; skipped (--skip-existing)", err=True)
+            click.echo(f"lptrack: {input_label(video)}: outputs exist; skipped (--skip-existing)", err=True)
         return
     try:
         summary = run_video(video, roi, tracker=tracker, start_frame=start_frame, max_frames=max_frames,
@@ -311,13 +311,13 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
     if not show:
         return
     if roi is None and start_frame > 0 and any(p.is_file() for p in roi_sidecar_paths(video)):
-        click.echo(f"lptrack: note: the ROI came from {video.name}'s .roi file and was applied to start frame "
+        click.echo(f"lptrack: note: the ROI came from {input_label(video)}'s .roi file and was applied to start frame "
                    f"{start_frame}", err=True)
     if summary.video_fps_guessed:
         click.echo(f"lptrack: warning: {_rate_assumed(str(video), summary.video_fps, summary.video_out is not None)}",
                    err=True)
     if summary.truncated:
-        click.echo(f"lptrack: warning: {_truncation(video.name, summary.frames, summary.expected_frames)}",
+        click.echo(f"lptrack: warning: {_truncation(input_label(video), summary.frames, summary.expected_frames)}",
                    err=True)
     if summary.video_out is not None and video_out is not None and summary.video_out != Path(video_out):
         click.echo(f"lptrack: warning: could not write '{video_out}'; wrote '{summary.video_out}' "
@@ -328,7 +328,7 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
     if summary.csv_out is not None:
         what = data_format.upper()
         outputs.append(f"{what} to stdout" if summary.csv_out == "-" else f"{what} {summary.csv_out}")
-    click.echo(f"lptrack: {video.name}: {summary.frames} frame{'' if summary.frames == 1 else 's'} "
+    click.echo(f"lptrack: {input_label(video)}: {summary.frames} frame{'' if summary.frames == 1 else 's'} "
                f"({summary.lost} lost) with {summary.tracker} at {summary.processing_fps:.1f} frames/s; "
                f"{'; '.join(outputs)}", err=True)
 

@@ -30,6 +30,7 @@ import ctypes.util  # noqa: E402
 import queue  # noqa: E402
 import re  # noqa: E402
 import threading  # noqa: E402
+import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Iterator  # noqa: E402
 
@@ -835,7 +836,7 @@ class _Encoder:
                 self._frames.get_nowait()
             except queue.Empty:
                 pass
-        waited = 0.0
+        give_up_at = time.monotonic() + _ABANDON_AFTER_S if discard else math.inf
         # Both waits wake the encoder again now and then: a stop signal raised in a thread inside the queue's
         # hand-over (between an item going in and the encoder being told) can leave the encoder asleep beside its
         # item, and `lptrack run` stopped by a signal hung in about 1 run in 25 (encoder in get(), caller here).
@@ -845,16 +846,17 @@ class _Encoder:
                 self._frames.put(_END, timeout=_WAKE_EVERY_S)
                 break
             except queue.Full:
-                waited = self._wake(waited)
-                if discard and waited >= _ABANDON_AFTER_S:
+                if not self._wake_before(give_up_at):
                     return False
         while not self.done.wait(_WAKE_EVERY_S):
-            waited = self._wake(waited)
-            if discard and waited >= _ABANDON_AFTER_S:
+            if not self._wake_before(give_up_at):
                 return False
         return True
 
-    def _wake(self, waited: float) -> float:
+    def _wake_before(self, give_up_at: float) -> bool:
+        """Wake the encoding thread, unless ``give_up_at`` (``time.monotonic()`` seconds) has passed."""
+        if time.monotonic() >= give_up_at:
+            return False
         with self._frames.not_empty:
             self._frames.not_empty.notify()
-        return waited + _WAKE_EVERY_S
+        return True

@@ -16,6 +16,7 @@ from ..geometry import check_roi_fits
 from ..look import (PLOT_SUFFIXES, ROUND_TOLERANCE, SHEET_ROWS, check_image_suffix, describe_video_search,
                     find_video_for_csv, matplotlib_hint, plot_track, read_frame, read_run_csv, roi_from_box,
                     roi_from_points, write_contact_sheet, write_frame_png)
+from ..video import input_label
 from . import OneLineErrors, main, parse_roi_option, require_stdout, write_stdout
 
 
@@ -102,7 +103,7 @@ def roi(video: Path, index: int, box: str | None, points: str | None, round_tol:
     result = roi_from_box(box, round_tolerance=round_tol) if box is not None else \
         roi_from_points(points, round_tolerance=round_tol)
     shot = read_frame(video, index)
-    check_roi_fits(result, shot.width, shot.height, source=f"'{video.name}' (frame {index})")
+    check_roi_fits(result, shot.width, shot.height, source=f"'{input_label(video)}' (frame {index})")
     spec = result.to_spec()
     write_stdout(spec + "\n")
     # Quoted as a shell needs them (a path with spaces), so that the line can be pasted.

@@ -292,11 +292,12 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
     if csv_out is None:
         csv_out = str(default_csv.with_suffix(FORMATS[data_format]))
     show = not quiet
+    label = input_label(video)
     if skip_existing and csv_out != "-" and outputs_complete(None if no_video else Path(video_out), Path(csv_out),
                                                              source=video, start_frame=start_frame,
                                                              max_frames=max_frames):
         if show:
-            click.echo(f"lptrack: {input_label(video)}: outputs exist; skipped (--skip-existing)", err=True)
+            click.echo(f"lptrack: {label}: outputs exist; skipped (--skip-existing)", err=True)
         return
     try:
         summary = run_video(video, roi, tracker=tracker, start_frame=start_frame, max_frames=max_frames,
@@ -311,13 +312,13 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
     if not show:
         return
     if roi is None and start_frame > 0 and any(p.is_file() for p in roi_sidecar_paths(video)):
-        click.echo(f"lptrack: note: the ROI came from {input_label(video)}'s .roi file and was applied to start frame "
+        click.echo(f"lptrack: note: the ROI came from {label}'s .roi file and was applied to start frame "
                    f"{start_frame}", err=True)
     if summary.video_fps_guessed:
         click.echo(f"lptrack: warning: {_rate_assumed(str(video), summary.video_fps, summary.video_out is not None)}",
                    err=True)
     if summary.truncated:
-        click.echo(f"lptrack: warning: {_truncation(input_label(video), summary.frames, summary.expected_frames)}",
+        click.echo(f"lptrack: warning: {_truncation(label, summary.frames, summary.expected_frames)}",
                    err=True)
     if summary.video_out is not None and video_out is not None and summary.video_out != Path(video_out):
         click.echo(f"lptrack: warning: could not write '{video_out}'; wrote '{summary.video_out}' "
@@ -328,7 +329,7 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
     if summary.csv_out is not None:
         what = data_format.upper()
         outputs.append(f"{what} to stdout" if summary.csv_out == "-" else f"{what} {summary.csv_out}")
-    click.echo(f"lptrack: {input_label(video)}: {summary.frames} frame{'' if summary.frames == 1 else 's'} "
+    click.echo(f"lptrack: {label}: {summary.frames} frame{'' if summary.frames == 1 else 's'} "
                f"({summary.lost} lost) with {summary.tracker} at {summary.processing_fps:.1f} frames/s; "
                f"{'; '.join(outputs)}", err=True)
 

@@ -233,6 +233,17 @@ class PhaseCorrelator:
         cross *= self._scaled_weight / (np.abs(cross) + np.float32(1e-12))
         return np.fft.irfft2(cross, s=self.shape).astype(np.float32, copy=False)
 
+    def cross_correlate(self, ref_spec: np.ndarray, img_spec: np.ndarray) -> np.ndarray:
+        """Plain (not whitened) circular cross-correlation surfaces ``(..., n_rho, n_theta)`` of the windowed,
+        normalised images of :meth:`spectrum`: at each shift, the normalised cross-correlation (-1 to 1) of ``img``
+        with ``ref`` moved by it, laid out as :meth:`correlate`'s surfaces.
+
+        Phase correlation weighs every frequency alike, so an image with little structure along one axis -- the
+        log-polar image of a plain disc, the same at every angle -- has most of its frequencies made of noise, and
+        its peak is low (0.04 for a plain disc matched with itself a frame later) though the images are alike
+        (0.99 here)."""
+        return np.fft.irfft2(img_spec * np.conj(ref_spec), s=self.shape).astype(np.float32, copy=False)
+
 
 @dataclass(frozen=True)
 class Peak:

@@ -485,6 +485,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self._lp_references()
         self.velocity = np.zeros(2)  # pixels per frame
         self._last_speed = 0.0  # of the last tracked frame, pixels per frame (see _within_reach)
+        # Frames since the last one reported tracked (self.last), and the speed then (see _long_term_search).
+        self._since_reported, self._reported_speed = 0, 0.0
         # Predicted change per frame (see _turn_and_zoom_after): degrees counter-clockwise, natural log of scale.
         self.spin_deg, self.zoom = 0.0, 0.0
         #: Running mean misses (pixels) of the prediction with the velocity and without it (see _prediction_gain).
@@ -514,6 +516,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         # After a drop, a match above lost_threshold but below the resume level is still a search.
         return self.misses > 0
 
+    def _accept(self, estimate: Similarity) -> None:
+        self._since_reported, self._reported_speed = 0, self._last_speed
+
     def _resume_level(self) -> float:
         """The match at which tracking resumes after a drop (see ``_RESUME_OVER_DROP``)."""
         return min(_RESUME_OVER_DROP * self.drop_ratio, 1.0) * self.match_level
@@ -530,6 +535,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         # Search from the tracker's own latest estimate, even when it was reported lost (the report keeps the
         # last good geometry): an object that only looked unlike itself for a few frames is followed on.
         last = self.cursor
+        self._since_reported += 1
         self._blur_scale = last.scale
         gain = self._prediction_gain()
         predicted = Similarity(last.cx + gain * self.velocity[0], last.cy + gain * self.velocity[1],
@@ -843,7 +849,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         # A sharper response elsewhere must also match the object (filter peak x log-polar height) better than
         # the estimate here, and well enough to be reported tracked: a patch of background that only beats a
         # misplaced estimate is no reason to jump there (seen jumping 300 px off a half-covered object, and
-        # settling on background 150 px away while the object was out of view).
+        # settling on background 150 px away while the object was out of view). The log-polar height, not the
+        # score's match with its likeness (_match): with that, a place on background was taken for an object that
+        # had left the view for good (tests/test_lpcf.py). A plain disc, whose height is low, is found again by
+        # the long-term search.
         _, here = self._scale_rotate(frame, best)
         _, there = self._scale_rotate(frame, found[0])
         floor = max(peak * here, self._resume_level() ** 2, self.lost_threshold ** 2)
@@ -851,16 +860,18 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             return best, psr, peak
         return found
 
-    def _within_reach(self, centres: np.ndarray, last: Similarity, frames: int) -> np.ndarray:
+    def _within_reach(self, centres: np.ndarray, last: Similarity, frames: int,
+                      speed: float | None = None) -> np.ndarray:
         """Which of ``centres`` (pixels, ``(n, 2)``) an object last seen at ``last`` ``frames`` frames ago may have
         reached: ``_SEARCH_REACH`` semi-axes (the larger, at ``last``'s scale) plus, a frame,
-        ``_SEARCH_REACH_PER_FRAME`` semi-axes or ``_SEARCH_REACH_SPEED`` times the speed it was last tracked at,
-        whichever is more; anywhere if ``last`` is near the frame's edge (the object may have left the view and
-        come back on any side)."""
+        ``_SEARCH_REACH_PER_FRAME`` semi-axes or ``_SEARCH_REACH_SPEED`` times ``speed`` (pixels a frame; default
+        the speed it was last tracked at), whichever is more; anywhere if ``last`` is near the frame's edge (the
+        object may have left the view and come back on any side)."""
         semi_axis = max(self.roi.a, self.roi.b) * last.scale
         if self._edge_distance(last.cx, last.cy) < _SEARCH_REACH_EDGE * semi_axis:
             return np.ones(len(centres), bool)
-        per_frame = max(_SEARCH_REACH_PER_FRAME * semi_axis, _SEARCH_REACH_SPEED * self._last_speed)
+        speed = self._last_speed if speed is None else speed
+        per_frame = max(_SEARCH_REACH_PER_FRAME * semi_axis, _SEARCH_REACH_SPEED * speed)
         reach = _SEARCH_REACH * semi_axis + per_frame * frames
         return np.hypot(centres[:, 0] - last.cx, centres[:, 1] - last.cy) <= reach
 
@@ -890,7 +901,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             pose = Similarity(cursor.cx, cursor.cy, cursor.scale * size, cursor.rotation_deg, cursor.score)
             margin = _LONG_TERM_EDGE * min(self.roi.a, self.roi.b) * pose.scale
             centres = self._frame_candidates(frame, pose, _SEARCH_CANDIDATES, long_term=True)
-            centres = centres[self._within_reach(centres, cursor, self._long_term_weak)]
+            # Within reach of the estimate, or of the last place reported tracked at the speed it had then: an
+            # estimate left on an occluder or the background stands still while the object goes on.
+            centres = centres[self._within_reach(centres, cursor, self._long_term_weak)
+                              | self._within_reach(centres, self.last, self._since_reported, self._reported_speed)]
             for cx, cy in centres:
                 place = Similarity(float(cx), float(cy), pose.scale, pose.rotation_deg, pose.score)
                 _, spectrum = self._features_and_spectrum(frame, place)

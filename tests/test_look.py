@@ -303,6 +303,20 @@ def test_eval_refuses_a_status_or_score_off_contract_as_plot_and_sheet_do(tiny_r
         read_track_csv(cases["score"])
 
 
+def test_eval_refuses_its_two_files_the_wrong_way_round(tiny_run):
+    """A .gt.csv and a run CSV are both CSVs of frames and ellipses: given swapped, eval scored the ground truth
+    against the run (exit 0), and a .gt.csv against itself at AUC 0.952."""
+    _, run_csv, gt = tiny_run
+    assert invoke("eval", run_csv, gt).exit_code == 0
+    for pred, truth, said in ((gt, run_csv, "is ground truth (a .gt.csv), not a run"),
+                              (gt, gt, "is ground truth (a .gt.csv), not a run"),
+                              (run_csv, run_csv, "is an lptrack run (its columns include time_s and status)")):
+        result = invoke("eval", pred, truth)
+        assert result.exit_code == 2 and result.stdout == ""
+        assert result.stderr.count("\n") == 1 and said in result.stderr
+        assert "the run's CSV goes first: lptrack eval PRED.csv GT" in result.stderr
+
+
 def test_eval_refuses_a_batch_stream_of_several_videos(tiny_run, tmp_path):
     """``run a b --csv -`` writes one stream with a 'video' column; its videos' frame numbers overlap, and eval
     scored the last video's rows against the first one's ground truth (AUC 0.038 for a run of 0.787)."""

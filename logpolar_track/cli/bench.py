@@ -207,6 +207,28 @@ def _note_skipped(skipped: list[tuple[str, str]], quiet: bool) -> None:
             click.echo(f"lptrack: note: skipping {name}: {reason}", err=True)
 
 
+def _check_argument_order(prediction: Path, ground_truth: Path) -> None:
+    """Refuse a ground-truth file given as the run, or a run CSV given as the ground truth: both are CSVs of frames
+    and ellipses, and eval scored them the other way round without a word (a .gt.csv against itself: AUC 0.952)."""
+    usage = "the run's CSV goes first: lptrack eval PRED.csv GT"
+    if prediction.name.lower().endswith(".gt.csv"):
+        raise UsageError(f"PRED.csv '{prediction}' is ground truth (a .gt.csv), not a run; {usage}")
+    if ground_truth.suffix.lower() in (".csv", ".jsonl") and ground_truth.is_file():
+        columns = _first_line(ground_truth).replace('"', "").split(",")
+        if ground_truth.suffix.lower() == ".jsonl" or {"time_s", "status"} <= {c.strip() for c in columns}:
+            raise UsageError(f"GT '{ground_truth}' is an lptrack run (its columns include time_s and status), not "
+                             f"ground truth; {usage}")
+
+
+def _first_line(path: Path) -> str:
+    """The first line of a text file, or '' if it cannot be read as text (its reader then says what is wrong)."""
+    try:
+        with open(path, encoding="utf-8-sig", errors="strict") as fh:
+            return fh.readline(65536).strip()
+    except (OSError, UnicodeDecodeError):
+        return ""
+
+
 def _emit(table: str, doc: dict | None, json_out: str | None) -> None:
     """The table on stdout and the JSON document to ``json_out``; with ``--json -`` the table goes to stderr."""
     if json_out is not None:
@@ -239,6 +261,7 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, ove
     from ..datasets import load_ground_truth
     from ..evaluate import read_track_csv, score_track
     _check_json_out(json_out, overwrite)
+    _check_argument_order(prediction, ground_truth)
 
     track = read_track_csv(prediction)
     gt = load_ground_truth(ground_truth)

@@ -235,8 +235,9 @@ class PhaseCorrelator:
 
     def cross_correlate(self, ref_spec: np.ndarray, img_spec: np.ndarray) -> np.ndarray:
         """Plain (not whitened) circular cross-correlation surfaces ``(..., n_rho, n_theta)`` of the windowed,
-        normalised images of :meth:`spectrum`: at each shift, the normalised cross-correlation (-1 to 1) of ``img``
-        with ``ref`` moved by it, laid out as :meth:`correlate`'s surfaces.
+        normalised images of :meth:`spectrum`, laid out as :meth:`correlate`'s surfaces: at each shift, the inner
+        product of the windowed, zero-mean, unit-norm ``img`` with the same of ``ref`` moved (circularly) by it,
+        from -1 to 1 (1 for identical images at no shift).
 
         Phase correlation weighs every frequency alike, so an image with little structure along one axis -- the
         log-polar image of a plain disc, the same at every angle -- has most of its frequencies made of noise, and

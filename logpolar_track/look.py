@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Sequence
@@ -845,10 +846,14 @@ def plot_track(run, out_png, *, video=None, ground_truth=None, overwrite: bool =
     axes[-1].set_xlabel("time (s)")
     n_lost = int(lost.sum())
     fig.suptitle(title or f"{table.source}: {len(table)} frames, {n_lost} lost", fontsize=11)
-    fig.tight_layout()
     temp = temporary_path(Path(out_png))
     try:
-        fig.savefig(temp, dpi=PLOT_DPI)
+        with warnings.catch_warnings():
+            # A file name in a script the font lacks (CJK) is drawn as boxes; matplotlib's warning about each
+            # glyph, with its source line, would reach the user's terminal twice per character.
+            warnings.filterwarnings("ignore", message="Glyph .* missing from", category=UserWarning)
+            fig.tight_layout()
+            fig.savefig(temp, dpi=PLOT_DPI)
         os.replace(temp, out_png)
     except OSError as exc:
         raise OutputError(f"cannot write '{out_png}': {exc.strerror or exc}") from None

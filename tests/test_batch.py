@@ -292,7 +292,8 @@ def test_param_reaches_every_video_of_a_batch(work, jobs):
 def test_bad_param_stops_a_batch_before_any_video(work):
     result = invoke("footage/day1", "--out-dir", "out", "--no-video", "--param", "window=9")
     assert result.exit_code == 2 and not (work / "out").exists()
-    assert result.stderr.startswith("lptrack: error: no parameter 'window' in lpcf: lpcf takes padding (1.0), ")
+    assert result.stderr.startswith("lptrack: error: no parameter 'window' in lpcf (did you mean 'window_power'?): "
+                                    "lpcf takes padding (1.0), ")
     assert len(result.stderr.strip().splitlines()) == 1
     # Checked against the trackers of the videos that run: here the ROI file gives every one the thesis tracker,
     # so an lpcf parameter is used by none (the default tracker, lpcf, tracks nothing) and is refused.

@@ -451,6 +451,20 @@ def test_plot_has_the_expected_size_with_and_without_ground_truth(tiny_run, tmp_
 
 
 @needs_matplotlib
+def test_plot_of_a_file_named_in_a_script_the_font_lacks_says_nothing_more(tiny_run, tmp_path):
+    """matplotlib warned about every CJK glyph of the title (the file's name), with its source lines, on stderr."""
+    _, run_csv, _ = tiny_run
+    named = tmp_path / "my clip ü 日本.lptrack.csv"
+    named.write_text(run_csv.read_text())
+    import warnings
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")  # as a plain `python -W default` run shows them
+        result = invoke("plot", named, "-o", tmp_path / "out.png", "--no-video")
+    assert result.exit_code == 0, result.stderr
+    assert not [w for w in caught if "Glyph" in str(w.message)]
+
+
+@needs_matplotlib
 def test_plot_takes_a_sequence_folder_as_ground_truth_as_eval_does(tiny_run, tmp_path):
     video, run_csv, gt = tiny_run
     folder = tmp_path / "tiny"

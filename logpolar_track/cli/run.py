@@ -24,6 +24,7 @@ from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, defau
                         run_video)
 from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
+from ..trackers.base import did_you_mean
 from ..video import check_fps, guess_image_sequence, input_label, make_output_folder, remove_empty_folders
 from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, check_jobs_or_scheduler, main, parse_param_options,
                parse_roi_option, stdout_reader_left)
@@ -50,6 +51,12 @@ class TrackerChoice(click.Choice):
     @choices.setter
     def choices(self, value) -> None:  # click.Choice.__init__ assigns; the registry is the source instead
         pass
+
+    def convert(self, value, param, ctx):
+        if value in self.choices:
+            return value
+        self.fail(f"'{value}' is not a tracker{did_you_mean(str(value), self.choices)}; choose one of: "
+                  f"{', '.join(self.choices)}", param, ctx)
 
 
 def _tracker_lines() -> str:

@@ -7,6 +7,7 @@ frame" -- data, not an error -- and ``state`` then holds the last good geometry.
 
 from __future__ import annotations
 
+import difflib
 import inspect
 import math
 from abc import ABC, abstractmethod
@@ -276,8 +277,16 @@ def tracker_class(name: str):
     except KeyError:
         # Every registered name, those this install cannot run included: naming one of them then says what to
         # install (create_tracker), rather than that it does not exist.
-        raise UsageError(f"unknown tracker '{name}'; choose one of: "
-                         f"{', '.join(tracker_names(include_unavailable=True))}") from None
+        names = tracker_names(include_unavailable=True)
+        raise UsageError(f"unknown tracker '{name}'{did_you_mean(name, names)}; choose one of: "
+                         f"{', '.join(names)}") from None
+
+
+def did_you_mean(name: str, choices: Iterable[str]) -> str:
+    """`` (did you mean 'x'?)`` for the choice nearest a misspelt ``name`` (difflib's ratio at least 0.6), or ''
+    if none is near."""
+    near = difflib.get_close_matches(name, list(choices), n=1, cutoff=0.6)
+    return f" (did you mean '{near[0]}'?)" if near else ""
 
 
 def create_tracker(name: str, **params) -> Tracker:
@@ -385,7 +394,8 @@ def tracker_params_from_text(trackers: Iterable[str], assignments: Iterable[tupl
             absent = [name for name in skipped if key in tracker_parameters(name)]
             if absent:
                 listing += f" ({', '.join(absent)} {'takes' if len(absent) == 1 else 'take'} it but cannot run here)"
-            raise UsageError(f"no parameter '{key}' in {who}: {listing}")
+            near = did_you_mean(key, {k for tracker in trackers for k in taken[tracker]})
+            raise UsageError(f"no parameter '{key}' in {who}{near}: {listing}")
         for tracker in takers:
             params[tracker][key] = _converted(tracker, key, text, taken[tracker][key])
     for tracker, chosen in params.items():

@@ -160,7 +160,8 @@ def video_key(path) -> Path:
 
 
 def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None,
-                on_duplicate: Callable[[Path], None] | None = None) -> list[VideoInput]:
+                on_duplicate: Callable[[Path], None] | None = None,
+                on_own_output: Callable[[Path, Path], None] | None = None) -> list[VideoInput]:
     """The videos named by ``inputs``, in order, each once.
 
     Parameters
@@ -175,6 +176,9 @@ def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None,
         Where ``-`` reads (default ``sys.stdin``).
     on_duplicate : callable, optional
         Called with the path of each video named again, as it is dropped.
+    on_own_output : callable, optional
+        Called with ``(output, source)`` for each video dropped as lptrack's own annotated video of another input
+        (``clip.lptrack.mp4`` beside ``clip.mp4``, as a shell's ``*.mp4`` names both).
 
     Raises
     ------
@@ -209,7 +213,20 @@ def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None,
                 add(VideoInput(video, root=path))
         else:
             add(VideoInput(path))
-    return found
+    # A shell's *.mp4 names lptrack's own annotated videos beside their sources: tracked again, they gave
+    # clip.lptrack.lptrack.mp4, one more each run. One named with no source among the inputs is tracked.
+    stems = {video_key(v.path).with_suffix("") for v in found}
+    kept = []
+    for video in found:
+        stem = Path(video.path.stem)
+        source_stem = video_key(video.path).parent / stem.stem
+        if stem.suffix == OUTPUT_STEM_SUFFIX and source_stem in stems:
+            if on_own_output is not None:
+                source = next(v.path for v in found if video_key(v.path).with_suffix("") == source_stem)
+                on_own_output(video.path, source)
+            continue
+        kept.append(video)
+    return kept
 
 
 def _is_number(text: str) -> bool:

@@ -268,6 +268,9 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
     """Raise before any work if an output cannot be written (see :func:`run_video`)."""
     planned = []
     if video_out is not None:
+        if str(video_out) == "-":
+            raise UsageError("the annotated video cannot go to stdout ('-o -'); give it a file name, or use "
+                             "--no-video (the rows go to stdout with --csv -)")
         if writes_in_place(video_out):  # the video is renamed into place: it cannot go to a device or pipe
             check_output_path(video_out, what="output video")
         if Path(video_out).suffix.lower() not in CODECS_BY_EXTENSION:
@@ -283,7 +286,8 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
     inputs = [(video_path, "the input video")]
     inputs += [(roi, "the input's ROI file") for roi in roi_sidecar_paths(video_path)]
     for out, what in planned:
-        check_output_path(out, overwrite=overwrite, what=what, special_ok=what == "output CSV")
+        check_output_path(out, overwrite=overwrite, what=what, special_ok=what == "output CSV",
+                          keep_hint=" (or --skip-existing to keep a video's outputs and track the others)")
         for source, name in inputs:
             if out.exists() and source.exists() and out.resolve() == source.resolve():
                 raise OutputError(f"{what} '{out}' is {name}; choose another name")

@@ -518,11 +518,13 @@ def temporary_path(path: Path, *, pid: int | None = None) -> Path:
     return path.with_name(f".{path.stem}.{os.getpid() if pid is None else pid}.part{path.suffix}")
 
 
-def check_output_path(path, *, overwrite: bool = False, what: str = "output", special_ok: bool = False) -> Path:
+def check_output_path(path, *, overwrite: bool = False, what: str = "output", special_ok: bool = False,
+                      keep_hint: str = "") -> Path:
     """Check that ``path`` can be written; return it as a :class:`Path`.
 
     ``special_ok`` accepts what :func:`writes_in_place` -- ``/dev/null``, ``/dev/stdout``, a named pipe, a
-    process substitution's ``/dev/fd/N`` -- which is then written directly, never replaced.
+    process substitution's ``/dev/fd/N`` -- which is then written directly, never replaced. ``keep_hint`` is
+    added to the message about an existing file (another way to go on than ``--overwrite``).
 
     Raises
     ------
@@ -545,7 +547,7 @@ def check_output_path(path, *, overwrite: bool = False, what: str = "output", sp
     if path.is_dir():
         raise OutputError(f"cannot write {what} '{path}': it is a folder")
     if path.exists() and not overwrite:
-        raise OutputError(f"{what} '{path}' already exists; use --overwrite to replace it")
+        raise OutputError(f"{what} '{path}' already exists; use --overwrite to replace it{keep_hint}")
     return path
 
 

@@ -388,6 +388,20 @@ def test_find_videos_sorts_and_skips_outputs_and_hidden_files(tmp_path):
     assert found == [VideoInput(tmp_path / "a.MOV", tmp_path), VideoInput(tmp_path / "b/x.mp4", tmp_path)]
 
 
+def test_a_shell_glob_does_not_track_lptracks_own_videos_beside_their_sources(tmp_path):
+    """``lptrack run *.mp4`` in a folder already run named clip.lptrack.mp4 too: tracked again, it wrote
+    clip.lptrack.lptrack.mp4, one more each run. Named beside its source it is skipped, with a note; alone, or
+    beside other videos but not its source, it is tracked."""
+    for name in ("clip.mp4", "clip.lptrack.mp4", "other.lptrack.mp4"):
+        (tmp_path / name).touch()
+    dropped = []
+    found = find_videos([str(tmp_path / n) for n in ("clip.lptrack.mp4", "clip.mp4", "other.lptrack.mp4")],
+                        on_own_output=lambda out, source: dropped.append((out.name, source.name)))
+    assert [v.path.name for v in found] == ["clip.mp4", "other.lptrack.mp4"]
+    assert dropped == [("clip.lptrack.mp4", "clip.mp4")]
+    assert [v.path.name for v in find_videos([str(tmp_path / "clip.lptrack.mp4")])] == ["clip.lptrack.mp4"]
+
+
 def test_outputs_never_collide(work):
     shutil.copy(work / "footage/day2/c.avi", work / "footage/day2/a.avi")
     (work / "footage/day2/a.roi").write_text("80,60,20\n")

@@ -176,7 +176,7 @@ def test_existing_output_is_not_overwritten_without_flag(tiny_video, workdir):
     result = invoke(tiny_video.path)
     assert result.exit_code == 1
     assert result.stderr.count("\n") == 1 and "tiny.lptrack.csv" in result.stderr
-    assert "--overwrite" in result.stderr
+    assert "use --overwrite to replace it (or --skip-existing to keep" in result.stderr
     assert listing(workdir) == ["tiny.lptrack.csv"]
     assert (workdir / "tiny.lptrack.csv").read_text() == "precious\n"
     assert invoke(tiny_video.path, "--overwrite", "-q").exit_code == 0
@@ -275,6 +275,7 @@ BAD = {
     "zero-frames": (None, ["--frames", "0"], 2, ["--frames"]),
     "unsupported-video-extension": (None, ["--out", "out.txt"], 2, ["unsupported extension", ".mp4"]),
     "out-and-no-video": (None, ["--out", "a.mp4", "--no-video"], 2, ["--no-video"]),
+    "video-to-stdout": (None, ["--out", "-"], 2, ["the annotated video cannot go to stdout ('-o -')", "--no-video"]),
     "param-unknown": (None, ["--param", "nosuch=1"], 2, ["no parameter 'nosuch' in lpcf", "learning_rate (0.02)"]),
     "param-misspelt": (None, ["--param", "learnig_rate=0.05"], 2,
                        ["no parameter 'learnig_rate' in lpcf (did you mean 'learning_rate'?)"]),

@@ -216,7 +216,12 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
         if not quiet:
             click.echo(f"lptrack: note: '{path}' is named more than once; tracked once", err=True)
 
-    inputs = find_videos(videos, on_duplicate=named_again)
+    def own_output(path: Path, source: Path) -> None:
+        if not quiet:
+            click.echo(f"lptrack: note: skipping '{path}': lptrack's annotated video of '{source}' (name it "
+                       f"without its source to track it)", err=True)
+
+    inputs = find_videos(videos, on_duplicate=named_again, on_own_output=own_output)
     if videos and not inputs:
         folders = [Path(v) for v in videos if v != "-" and Path(v).is_dir()]
         why = ""

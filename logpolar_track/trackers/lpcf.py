@@ -35,10 +35,11 @@ Per frame:
    (``iterations``), unless their estimates already agree.
 5. **Judge and learn**: the score is the match (geometric mean of the filter's response peak and the
    log-polar match: the phase correlation's height or, where higher, the 4th power of the log-polar images'
-   likeness, which an object alike at every angle needs: see ``_SIMILARITY_POWER``); below ``lost_threshold`` the frame is reported lost with the last good geometry, and
-   so is every frame after a sudden drop (below ``drop_ratio``) until the match is back above a higher level.
-   Only frames with a sharp filter response (peak-to-sidelobe ratio) and no sudden drop of the match update
-   the filter and the log-polar model (running averages), so occluders and distractors are not learnt. After
+   likeness, which an object alike at every angle needs: see ``_SIMILARITY_POWER``); below ``lost_threshold``
+   the frame is reported lost with the last good geometry, and so is every frame after a sudden drop (below
+   ``drop_ratio``) until the match is back above a higher level. Only frames with a sharp filter response
+   (peak-to-sidelobe ratio) and no sudden drop of the match update the filter and the log-polar model (running
+   averages), so occluders and distractors are not learnt. After
    a few frames of such a drop the object is searched for over the whole frame (re-detection): every third
    frame the filter is correlated with the frame at half its sampling density (a large frame, one part at a
    time, nearest the object's last place first), and the best two places are correlated again at full
@@ -1602,9 +1603,9 @@ class _PackedSpectra:
 
     def product(self, parts: np.ndarray, spectra: np.ndarray) -> np.ndarray:
         """Packed ``sum_c a_c * x_c`` ``(h, w)`` of the filter ``parts`` and packed ``spectra`` ``(C, h, w)``."""
-        # Both channel sums in one einsum, without the (C, h w) products (a quarter faster than multiplying
-        # and summing, 7 channels of 64 x 64). swap(V) * x summed over channels, then swapped, equals the sum of
-        # V * swap(x).
+        # Both channel sums in one einsum, without the (C, h w) products (7 channels of 64 x 64: 14.7 against
+        # 18.7 us for multiplying and summing in one measurement, level in another). swap(V) * x summed over
+        # channels, then swapped, equals the sum of V * swap(x).
         sums = np.einsum("kci,ci->ki", parts, spectra.reshape(len(spectra), -1))
         packed = sums[0] + sums[1][self.swap]
         return packed.reshape(self.shape)

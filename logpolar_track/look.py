@@ -300,9 +300,12 @@ def write_png(path, image: np.ndarray, *, overwrite: bool = False, what: str = "
     return path
 
 
-def default_frame_png(video_path, index: int, folder=".") -> Path:
-    """Default output of ``lptrack frame``: ``<video stem>.frame<index>.png`` in ``folder``."""
-    return Path(folder) / f"{video_stem(video_path)}.frame{int(index)}.png"
+def default_frame_png(video_path, index: int, folder=".", roi: Ellipse | None = None) -> Path:
+    """Default output of ``lptrack frame``: ``<video stem>.frame<index>.png`` in ``folder``; with a candidate
+    ``roi`` drawn, ``<video stem>.frame<index>.roi_<cx>_<cy>_<r>.png`` (its spec, commas as underscores), so that
+    trying one ROI after another neither collides with the plain frame nor with the ROIs tried before."""
+    tag = "" if roi is None else ".roi_" + roi.to_spec().replace(",", "_")
+    return Path(folder) / f"{video_stem(video_path)}.frame{int(index)}{tag}.png"
 
 
 def write_frame_png(video_path, out_png=None, *, index: int | None = None, time_s: float | None = None,
@@ -329,7 +332,7 @@ def write_frame_png(video_path, out_png=None, *, index: int | None = None, time_
         The PNG written; same width and height as the frame.
     """
     frame = read_frame(video_path, index, time_s=time_s, fps=fps)
-    out_png = default_frame_png(video_path, frame.index) if out_png is None else Path(out_png)
+    out_png = default_frame_png(video_path, frame.index, roi=roi) if out_png is None else Path(out_png)
     check_image_suffix(out_png, (".png",), "output image")
     check_output_path(out_png, overwrite=overwrite, what="output image")
     image = frame.image

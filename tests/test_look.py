@@ -89,6 +89,20 @@ def test_roi_hint_quotes_a_path_the_shell_would_split(tiny_video, tmp_path):
     assert f"lptrack: check it with: lptrack frame '{spaced}' --at 0 --roi 80,60,20" in result.stderr
 
 
+def test_frame_with_each_candidate_roi_gets_a_name_of_its_own(tiny_video, tmp_path, monkeypatch):
+    """Trying ROIs one after another: each drawn frame was written to tiny.frame0.png, and the second try stopped
+    with 'already exists'."""
+    monkeypatch.chdir(tmp_path)
+    names = []
+    for args in ((), ("--roi", "80,60,20"), ("--roi", "80.5,60,20,12,30")):
+        result = invoke("frame", tiny_video.path, *args)
+        assert result.exit_code == 0, result.stderr
+        names.append(result.stdout.strip())
+    assert names == ["tiny.frame0.png", "tiny.frame0.roi_80_60_20.png", "tiny.frame0.roi_80.5_60_20_12_30.png"]
+    assert all((tmp_path / name).is_file() for name in names)
+    assert "already exists" in one_error_line(invoke("frame", tiny_video.path, "--roi", "80,60,20"), 1)
+
+
 def test_frame_command_writes_the_exact_frame(tiny_video, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     result = invoke("frame", tiny_video.path, "--at", 12, "--grid", 0)

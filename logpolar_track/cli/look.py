@@ -33,13 +33,14 @@ Examples:
   lptrack frame clip.mp4                          # frame 0 -> clip.frame0.png
   lptrack frame clip.mp4 --at 120 --grid 20
   lptrack frame clip.mp4 --time 4.5 -o look.png
-  lptrack frame clip.mp4 --roi 320,240,60,30,15   # check a ROI before a run
+  lptrack frame clip.mp4 --roi 320,240,60,30,15   # -> clip.frame0.roi_320_240_60_30_15.png
 """)
 @click.argument("video", type=_VIDEO)
 @click.option("--at", "index", type=int, metavar="N", help="Frame index, 0 = first frame of the file. Default 0.")
 @click.option("--time", "time_s", type=float, metavar="SECONDS", help="Instead of --at: the frame at this time.")
 @click.option("-o", "--out", "out_png", type=click.Path(dir_okay=False, path_type=Path), metavar="PNG",
-              help="PNG to write. Default: <video stem>.frame<N>.png in the current folder.")
+              help="PNG to write. Default: <video stem>.frame<N>.png in the current folder "
+                   "(with --roi: <video stem>.frame<N>.roi_<spec>.png).")
 @click.option("--grid", type=click.IntRange(min=0), default=50, show_default=True, metavar="PX",
               help="Grid line spacing in pixels; 0 for no grid.")
 @click.option("--roi", "roi_spec", metavar="SPEC",

@@ -215,14 +215,15 @@ def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None,
             add(VideoInput(path))
     # A shell's *.mp4 names lptrack's own annotated videos beside their sources: tracked again, they gave
     # clip.lptrack.lptrack.mp4, one more each run. One named with no source among the inputs is tracked.
-    stems = {video_key(v.path).with_suffix("") for v in found}
+    sources: dict[Path, Path] = {}  # each input's key without its extension -> the first input of that stem
+    for video in found:
+        sources.setdefault(video_key(video.path).with_suffix(""), video.path)
     kept = []
     for video in found:
         stem = Path(video.path.stem)
-        source_stem = video_key(video.path).parent / stem.stem
-        if stem.suffix == OUTPUT_STEM_SUFFIX and source_stem in stems:
+        source = sources.get(video_key(video.path).parent / stem.stem)
+        if stem.suffix == OUTPUT_STEM_SUFFIX and source is not None:
             if on_own_output is not None:
-                source = next(v.path for v in found if video_key(v.path).with_suffix("") == source_stem)
                 on_own_output(video.path, source)
             continue
         kept.append(video)

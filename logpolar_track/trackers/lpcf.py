@@ -92,7 +92,7 @@ from ..colour import ColourLikelihood
 from ..errors import UsageError
 from ..features import patch_features
 from ..geometry import Ellipse
-from ..logpolar import LogPolarGrid, PhaseCorrelator, to_gray, within_0_255
+from ..logpolar import LogPolarGrid, PhaseCorrelator, to_gray
 from ..refine import AppearanceSubspace, similarity_step
 from ..scale_filter import ScaleFilter
 from .base import Similarity, SimilarityTracker, TrackState, check_ranges, register
@@ -1420,11 +1420,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         """The colour-to-grey map for an object whose grey (OpenCV's weights) hardly tells it from its surround
         (see ``_GREY_CONTRAST_KEPT``): the colour direction that does best (Fisher's discriminant of the pixels
         inside the ROI's ellipse against those 1.2 to 2 times beyond it), scaled into 0 to 255; else None."""
-        samples = cv2.warpAffine(frame, self._patch_matrix(first, self.size), self.size,
-                                 flags=cv2.INTER_NEAREST | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE)
-        pixels = samples[..., :3].reshape(-1, 3).astype(np.float64)
-        radius_squared = self._ellipse_radius_squared(roi, self.size).ravel()
-        inside, around = pixels[radius_squared < 1.0], pixels[(radius_squared > 1.44) & (radius_squared < 4.0)]
+        pixels = self._colour_samples(frame, first)[..., :3].astype(np.float64)
+        _, inside, around = self._object_and_surround(roi)
+        inside, around = pixels[inside], pixels[around]
         if len(inside) < 8 or len(around) < 8:
             return None
         difference = inside.mean(axis=0) - around.mean(axis=0)
@@ -1440,12 +1438,15 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         best = best / np.abs(best).sum()  # into 0 to 255 with the offset below
         return np.array([[*best, 255.0 * np.abs(np.minimum(best, 0.0)).sum()]], np.float32)
 
+    def _colour_samples(self, frame, state: Similarity) -> np.ndarray:
+        """The frame's pixels ``(ny, nx, channels)`` nearest the feature patch's samples at ``state``, as decoded
+        (no blur: colours need no anti-aliasing)."""
+        return cv2.warpAffine(frame, self._patch_matrix(state, self.size), self.size,
+                              flags=cv2.INTER_NEAREST | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE)
+
     def _colour_bins(self, frame, state: Similarity) -> np.ndarray:
-        """Colour histogram bins ``(ny, nx)`` of the frame's pixels nearest the feature patch's samples at
-        ``state`` (no blur: colour histograms need no anti-aliasing)."""
-        samples = cv2.warpAffine(frame, self._patch_matrix(state, self.size), self.size,
-                                 flags=cv2.INTER_NEAREST | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE)
-        return self.colour.bins(samples)
+        """Colour histogram bins ``(ny, nx)`` of the feature patch's samples at ``state`` (:meth:`_colour_samples`)."""
+        return self.colour.bins(self._colour_samples(frame, state))
 
     def _colour_response(self, frame, state: Similarity) -> np.ndarray:
         """``colour_weight`` times the colour response ``(ny, nx)`` of the feature patch at ``state``: the mean
@@ -1486,13 +1487,20 @@ class LogPolarCorrelationTracker(SimilarityTracker):
 
     def _plain_object_mask(self, frame, first: Similarity, roi: Ellipse) -> np.ndarray | None:
         """The training mask of a plain object over a busy surround (see ``_PLAIN_OBJECT_RATIO``), or None."""
-        radius = np.sqrt(self._ellipse_radius_squared(roi, self.size))  # 1 on the ROI's outline
+        radius, inside, around = self._object_and_surround(roi)
         energy = (patch_features(self._patch(frame, first))[1:] ** 2).sum(axis=0)  # oriented gradients
-        inside, around = energy[radius < 1.0], energy[(radius > 1.2) & (radius < 2.0)]
+        inside, around = energy[inside], energy[around]
         if inside.size == 0 or around.size == 0 or inside.mean() >= _PLAIN_OBJECT_RATIO * around.mean():
             return None
         inner, outer = _PLAIN_OBJECT_MASK
         return np.clip((outer - radius) / (outer - inner), 0.0, 1.0).astype(np.float32)
+
+    def _object_and_surround(self, roi: Ellipse) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Over the feature patch's samples ``(ny, nx)`` at scale 1: the radius of the ROI's ellipse through each (1
+        on its outline), and masks of the samples on the object (inside the ellipse) and around it (1.2 to 2 times
+        it)."""
+        radius = np.sqrt(self._ellipse_radius_squared(roi, self.size))
+        return radius, radius < 1.0, (radius > 1.2) & (radius < 2.0)
 
     def _log_polar(self, frame, state: Similarity) -> np.ndarray:
         """Log-polar image at ``state`` (``LogPolarGrid.sample`` for one centre, with the maps made by
@@ -1535,9 +1543,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         crop = frame[y0:y1, x0:x1]
         if self.grey_matrix is None:
             grey = to_gray(crop, np.uint8 if frame.dtype == np.uint8 else np.float32)
-        else:
-            if crop.dtype != np.uint8:
-                crop = within_0_255(crop[..., :3]).astype(np.float32)
+        else:  # uint8 BGR(A): see _in_colour
             grey = cv2.transform(np.ascontiguousarray(crop[..., :3]), self.grey_matrix)  # one channel, (h, w)
         self._grey_cache = frame, x0, y0, x1, y1, grey
         return grey

@@ -32,7 +32,7 @@ from typing import IO, Callable, Iterable, Mapping, Sequence
 from .errors import LptrackError, RoiError, UsageError
 from .executor import TaskOutcome, run_tasks
 from .geometry import ROI_SYNTAX, Ellipse, parse_roi
-from .pipeline import CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, run_video
+from .pipeline import CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, read_roi_sidecar, run_video
 from .results import FORMATS, header_line
 from .trackers import tracker_class
 from .video import (CODECS_BY_EXTENSION, announced_frame_count, check_fps, frames_to_track, make_output_folder,
@@ -343,15 +343,17 @@ def video_output_candidates(video_out: Path) -> list[Path]:
 
 
 def outputs_complete(video_out: Path | None, csv_out: Path | None, *, source: Path | None = None,
-                     start_frame: int = 0, max_frames: int | None = None) -> bool:
+                     start_frame: int = 0, max_frames: int | None = None, roi: Ellipse | None = None) -> bool:
     """Whether a run with these outputs (None: not wanted) finished: each exists under its final name and,
-    given the ``source`` video, the data file covers the frames this run would track.
+    given the ``source`` video, the data file covers the frames this run would track, from its ROI.
 
     Outputs are renamed to their final names only when complete, so existing means a run finished; but a run
     over other frames (a trial with ``--frames 5``, another start frame) finishes too. So the data file's
     first row must be ``start_frame`` and its last row at least the last frame wanted: ``max_frames`` on, or
     the end of the video as its container announces it (less 1 %, for containers that only estimate it; when
-    the count is unknown, the end is not checked).
+    the count is unknown, the end is not checked). Its first row must also be the ROI the run would start from
+    (``roi``, or None: the video's ``.roi`` sidecar), within 0.05 pixels: a run from a ROI since corrected is
+    redone. (The tracker and its parameters are not in the file, so a run with others is not noticed.)
     """
     if video_out is None and csv_out is None:
         return False
@@ -364,6 +366,14 @@ def outputs_complete(video_out: Path | None, csv_out: Path | None, *, source: Pa
     span = data_frame_span(csv_out)
     if span is None or span[0] != start_frame:
         return False
+    if roi is None:
+        try:
+            roi = read_roi_sidecar(source)
+        except LptrackError:
+            return False  # the run will say what is wrong with it
+    started_from = data_start_roi(csv_out)
+    if roi is None or started_from is None or not roi.same_outline(started_from):
+        return False
     announced = announced_frame_count(source)
     last_wanted = announced - 1 - announced // 100 if announced else None
     if max_frames is not None:
@@ -372,15 +382,29 @@ def outputs_complete(video_out: Path | None, csv_out: Path | None, *, source: Pa
     return last_wanted is None or span[1] >= last_wanted
 
 
-def data_frame_span(path: Path) -> tuple[int, int] | None:
-    """Frame numbers of the first and last rows of an lptrack CSV or JSON Lines file (None: no rows, or not
-    such a file)."""
+def _data_ends(path: Path) -> tuple[str | None, str, str] | None:
+    """The header line (None if there is none, as in JSON lines), the first row and the last row of an lptrack
+    CSV or JSON Lines file, as text; None when it has no rows or cannot be read. Reads only its two ends."""
     try:
         with open(path, "rb") as f:
             head = f.read(4096).decode("utf-8", "replace").splitlines()
             f.seek(max(f.seek(0, os.SEEK_END) - 4096, 0))
             tail = f.read().decode("utf-8", "replace").splitlines()
     except OSError:
+        return None
+    header = next((line for line in head if line.startswith("frame,")), None)
+    rows = [line for line in head if line.strip() and not line.startswith("frame,")]
+    last_rows = [line for line in tail if line.strip()]
+    if not rows or not last_rows:
+        return None
+    return header, rows[0], last_rows[-1]
+
+
+def data_frame_span(path: Path) -> tuple[int, int] | None:
+    """Frame numbers of the first and last rows of an lptrack CSV or JSON Lines file (None: no rows, or not
+    such a file)."""
+    ends = _data_ends(path)
+    if ends is None:
         return None
 
     def frame_of(line: str) -> int | None:
@@ -391,12 +415,27 @@ def data_frame_span(path: Path) -> tuple[int, int] | None:
         except (ValueError, KeyError, TypeError):
             return None
 
-    rows = [line for line in head if line.strip() and not line.startswith("frame,")]
-    last_rows = [line for line in tail if line.strip()]
-    if not rows or not last_rows:
-        return None
-    first, last = frame_of(rows[0]), frame_of(last_rows[-1])
+    first, last = frame_of(ends[1]), frame_of(ends[2])
     return None if first is None or last is None else (first, last)
+
+
+def data_start_roi(path: Path) -> Ellipse | None:
+    """The ellipse of the first row of an lptrack CSV or JSON Lines file: the ROI its run started from (None:
+    no rows, or not such a file)."""
+    ends = _data_ends(path)
+    if ends is None:
+        return None
+    header, first, _ = ends
+    try:
+        if first.startswith("{"):
+            record = json.loads(first)
+        elif header is not None:
+            record = dict(zip(header.split(","), next(csv.reader([first]))))
+        else:
+            return None
+        return Ellipse(*(float(record[k]) for k in ("cx", "cy", "a", "b", "angle_deg")))
+    except (ValueError, KeyError, TypeError, csv.Error):  # RoiError is a ValueError
+        return None
 
 
 @dataclass(frozen=True)
@@ -497,7 +536,7 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
             continue
         claimed.update({p: label for p in (video_out, csv_out) if p is not None})
         if skip_existing and outputs_complete(job.video_out, job.csv_out, source=job.video,
-                                              start_frame=job.start_frame, max_frames=max_frames):
+                                              start_frame=job.start_frame, max_frames=max_frames, roi=job.roi):
             settled[label] = VideoOutcome(label, "skipped", "outputs exist")
             continue
         jobs.append(job)

@@ -130,6 +130,18 @@ class Ellipse:
         v = -dx * math.sin(psi) + dy * math.cos(psi)
         return (u / self.a) ** 2 + (v / self.b) ** 2
 
+    def same_outline(self, other: "Ellipse", tolerance_px: float = 0.05) -> bool:
+        """Whether ``other`` traces this outline within ``tolerance_px`` pixels, however each is written
+        (either axis as ``a``, angles a half turn apart, a circle at any angle)."""
+        if math.hypot(self.cx - other.cx, self.cy - other.cy) > tolerance_px:
+            return False
+        for e, f in ((self, other), (other, self)):
+            x, y = e.boundary_points(32).T
+            # (r - 1) * the larger semi-axis bounds the distance of a point at elliptical radius r from f's outline
+            if np.max(np.abs(np.sqrt(f.radius_squared(x, y)) - 1.0)) * f.radius > tolerance_px:
+                return False
+        return True
+
     def contains(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Boolean mask of which pixel positions ``(x, y)`` lie inside the ellipse."""
         return self.radius_squared(x, y) <= 1.0

@@ -606,6 +606,23 @@ def test_skip_existing_resumes(work):
     assert refused.exit_code == 1 and "already exists; use --overwrite" in refused.stderr
 
 
+def test_skip_existing_redoes_the_videos_whose_roi_changed(work):
+    """A ROI corrected in the sidecar (or the ROI file) since the run: that video is tracked again, the others
+    are left alone."""
+    assert invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1").exit_code == 0
+    stamp = (work / "out/a.lptrack.csv").stat().st_mtime_ns
+    (work / "footage/day1/b.roi").write_text("82,60,20\n")
+    again = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1", "--skip-existing")
+    assert again.exit_code == 0 and "2 videos: 1 ok, 1 skipped (outputs exist), 0 failed" in again.stderr
+    assert (work / "out/a.lptrack.csv").stat().st_mtime_ns == stamp
+    assert csv_rows(work / "out/b.lptrack.csv")[0]["cx"] == "82.000"
+    (work / "rois.csv").write_text("footage/day1/a.mp4,80,60,20\nfootage/day1/b.mp4,82,61,20\n")
+    from_file = invoke("--roi-file", "rois.csv", "--out-dir", "out", "--no-video", "--jobs", "1",
+                       "--skip-existing")
+    assert from_file.exit_code == 0 and "2 videos: 1 ok, 1 skipped (outputs exist), 0 failed" in from_file.stderr
+    assert csv_rows(work / "out/b.lptrack.csv")[0]["cy"] == "61.000"
+
+
 def test_skip_existing_redoes_a_trial_run_over_fewer_frames(work):
     """Outputs of ``--frames 5`` (or another start frame) are complete files, but not this run's results."""
     trial = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1", "--frames", "5")

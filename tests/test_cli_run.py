@@ -141,6 +141,23 @@ def test_skip_existing_redoes_a_trial_run_and_skips_a_finished_one(tiny_video, w
     assert again.exit_code == 0 and "outputs exist; skipped (--skip-existing)" in again.stderr
 
 
+def test_skip_existing_redoes_a_run_from_another_roi(tiny_video, workdir):
+    """The first row holds the ROI a run started from: a corrected ROI is tracked again; the same outline written
+    another way (axes swapped, angle a quarter turn on) is the same run."""
+    assert invoke(tiny_video.path, "--no-video", "--roi", "80,60,20,12,10").exit_code == 0
+    same = invoke(tiny_video.path, "--no-video", "--skip-existing", "--roi", "80,60,12,20,100")
+    assert same.exit_code == 0 and "outputs exist; skipped" in same.stderr
+    moved = invoke(tiny_video.path, "--no-video", "--skip-existing", "--roi", "81,60,20,12,10")
+    assert moved.exit_code == 0 and "skipped" not in moved.stderr
+    first = read_rows(Path("tiny.lptrack.csv").read_text())[0]
+    assert [first[k] for k in ("cx", "cy", "a", "b", "angle_deg")] == ["81.000", "60.000", "20.000", "12.000",
+                                                                        "10.000"]
+    # Without --roi the run starts from tiny.roi (80,60,20), which the file's first row is not.
+    from_sidecar = invoke(tiny_video.path, "--no-video", "--skip-existing")
+    assert from_sidecar.exit_code == 0 and "skipped" not in from_sidecar.stderr
+    assert "outputs exist; skipped" in invoke(tiny_video.path, "--no-video", "--skip-existing").stderr
+
+
 def test_data_format_follows_the_csv_extension_unless_given(tiny_video, workdir):
     assert invoke(tiny_video.path, "--no-video", "--csv", "t.jsonl").exit_code == 0
     first = json.loads(Path("t.jsonl").read_text().splitlines()[0])

@@ -157,3 +157,13 @@ def test_parse_roi_wraps_any_angle(angle, wrapped):
     if wrapped is not None:
         assert roi.angle_deg == pytest.approx(wrapped)
     assert roi.angle_deg + 5.0 - roi.angle_deg == pytest.approx(5.0)
+
+
+def test_same_outline_however_written():
+    e = Ellipse(10.0, 20.0, 30.0, 15.0, 200.0)
+    assert e.same_outline(Ellipse(10.0, 20.0, 15.0, 30.0, 110.0))  # axes swapped, a quarter turn on
+    assert e.same_outline(Ellipse(10.0, 20.0, 30.0, 15.0, -160.0004))  # a half turn off, CSV rounding
+    assert Ellipse.circle(1.0, 2.0, 5.0).same_outline(Ellipse(1.0, 2.0, 5.0, 5.0, 33.0))
+    assert not e.same_outline(Ellipse(10.1, 20.0, 30.0, 15.0, 200.0))
+    assert not e.same_outline(Ellipse(10.0, 20.0, 30.1, 15.0, 200.0))
+    assert not e.same_outline(Ellipse(10.0, 20.0, 30.0, 15.0, 201.0))

@@ -150,8 +150,8 @@ Examples:
 @click.option("--no-video", is_flag=True, help="Do not write annotated videos (faster).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 @click.option("--skip-existing", is_flag=True,
-              help="Leave alone videos whose outputs all exist and cover the frames asked for; redo (replace) "
-                   "the others (resumes an interrupted batch).")
+              help="Leave alone videos whose outputs all exist and cover the frames asked for from the same ROI; "
+                   "redo (replace) the others (resumes an interrupted batch).")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=None, metavar="N",
               help="Videos tracked in parallel processes. Default: the number of cores.")
 @click.option("--scheduler", metavar="ADDRESS",
@@ -307,7 +307,7 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
     label = input_label(video)
     if skip_existing and csv_out != "-" and outputs_complete(None if no_video else Path(video_out), Path(csv_out),
                                                              source=video, start_frame=start_frame,
-                                                             max_frames=max_frames):
+                                                             max_frames=max_frames, roi=roi):
         if show:
             click.echo(f"lptrack: {label}: outputs exist; skipped (--skip-existing)", err=True)
         return

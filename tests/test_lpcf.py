@@ -93,11 +93,11 @@ def test_confidence_drops_on_a_swapped_object_and_recovers():
 
 def test_packed_spectra_match_numpy_fft():
     """The tracker's packed (cv2.dft CCS) correlation equals NumPy's complex arithmetic up to float32 rounding."""
-    from logpolar_track.trackers.lpcf import _PackedSpectra
+    from logpolar_track.spectra import PackedSpectra
 
     rng = np.random.default_rng(3)
     for h, w in [(64, 64), (52, 64), (64, 22)]:
-        packed = _PackedSpectra(h, w)
+        packed = PackedSpectra(h, w)
         x, a = rng.standard_normal((2, 3, h, w)).astype(np.float32)
         spec_x, spec_a = np.fft.rfft2(x.astype(np.float64)), np.fft.rfft2(a.astype(np.float64))
         px, pa = packed.forward(x), packed.forward(a)
@@ -124,11 +124,11 @@ def test_the_whole_frame_search_correlates_as_filter2d(filter_shape, map_shape):
     """The search's summed correlation, made in the Fourier domain, equals the channels' ``cv2.filter2D``
     correlations (anchored, zero beyond the map) summed, up to float32 rounding -- also for a map smaller than
     the kernels."""
-    from logpolar_track.trackers.lpcf import _CoarseFilter, _PackedSpectra
+    from logpolar_track.spectra import CoarseFilter, PackedSpectra
 
     rng = np.random.default_rng(5)
     filter_images = rng.standard_normal((7,) + filter_shape).astype(np.float32)
-    coarse = _CoarseFilter(_PackedSpectra(*filter_shape).forward(filter_images))
+    coarse = CoarseFilter(PackedSpectra(*filter_shape).forward(filter_images))
     maps = rng.standard_normal((7,) + map_shape).astype(np.float32)
     expected = sum(cv2.filter2D(m, cv2.CV_32F, k, anchor=coarse.anchor, borderType=cv2.BORDER_CONSTANT)
                    for m, k in zip(maps, coarse.kernels))
@@ -142,21 +142,21 @@ def test_the_whole_frame_search_keeps_a_bounded_number_of_kernel_spectra():
     """A search filter lives as long as the track (the long-term one) and a drifting scale gives every search a new
     map size: the spectra kept per size stay bounded, most recently used kept, and a size dropped and met again
     still correlates as ``cv2.filter2D``."""
-    from logpolar_track.trackers.lpcf import _KERNEL_SPECTRA_KEPT, _CoarseFilter, _PackedSpectra
+    from logpolar_track.spectra import KERNEL_SPECTRA_KEPT, CoarseFilter, PackedSpectra
 
     rng = np.random.default_rng(6)
-    coarse = _CoarseFilter(_PackedSpectra(40, 64).forward(rng.standard_normal((7, 40, 64)).astype(np.float32)))
+    coarse = CoarseFilter(PackedSpectra(40, 64).forward(rng.standard_normal((7, 40, 64)).astype(np.float32)))
     first = rng.standard_normal((7, 50, 70)).astype(np.float32)
     expected = sum(cv2.filter2D(m, cv2.CV_32F, k, anchor=coarse.anchor, borderType=cv2.BORDER_CONSTANT)
                    for m, k in zip(first, coarse.kernels))
     coarse.response(first)
     first_size = next(iter(coarse._kernel_spectra))
-    for step in range(3 * _KERNEL_SPECTRA_KEPT):
+    for step in range(3 * KERNEL_SPECTRA_KEPT):
         coarse.response(np.zeros((7, 50 + 6 * step, 70 + 6 * step), np.float32))
         coarse.response(first)  # in use throughout: never the one dropped
-        assert len(coarse._kernel_spectra) <= _KERNEL_SPECTRA_KEPT
+        assert len(coarse._kernel_spectra) <= KERNEL_SPECTRA_KEPT
         assert first_size in coarse._kernel_spectra
-    assert len(coarse._kernel_spectra) == _KERNEL_SPECTRA_KEPT
+    assert len(coarse._kernel_spectra) == KERNEL_SPECTRA_KEPT
     coarse.response(np.zeros((7, 50 + 6 * 1, 70 + 6 * 1), np.float32))  # dropped long ago: made again
     got = coarse.response(first)
     assert np.abs(got - expected).max() <= 1e-5 * np.abs(expected).max()
@@ -165,13 +165,13 @@ def test_the_whole_frame_search_keeps_a_bounded_number_of_kernel_spectra():
 def test_packed_phase_correlation_matches_phase_correlator():
     """The tracker's packed log-polar correlation gives PhaseCorrelator's surface up to float32 rounding."""
     from logpolar_track.logpolar import PhaseCorrelator
-    from logpolar_track.trackers.lpcf import _PackedPhaseCorrelator
+    from logpolar_track.spectra import PackedPhaseCorrelator
 
     rng = np.random.default_rng(4)
     reference = rng.random((32, 64)).astype(np.float32)
     image = np.roll(reference, (2, -5), axis=(0, 1)) + 0.1 * rng.random((32, 64)).astype(np.float32)
     correlator = PhaseCorrelator((32, 64))
-    packed = _PackedPhaseCorrelator(correlator)
+    packed = PackedPhaseCorrelator(correlator)
     spectra = correlator.spectrum(reference[None]), correlator.spectrum(image[None])
     expected, expected_plain = correlator.correlate(*spectra)[0], correlator.cross_correlate(*spectra)[0]
     got, cross = packed.correlate(packed.reference(reference), packed.spectrum(image))

@@ -289,7 +289,6 @@ def test_update_refuses_what_it_cannot_track(name, frame, fragment):
 def test_a_roi_angle_of_many_turns_tracks_as_its_angle_within_one(name):
     """An Ellipse's angle may be any finite number; the trackers compute their patches' angles from it, and one of
     1e300 degrees (through the API) left no precision for the turn tracked (4041 degrees reported for 39.5)."""
-    rng = np.random.default_rng(2)
     roi = Ellipse(80, 60, 25, 15, 30.0)
     poses = [Pose(80, 60, 1.0, 2.0 * i) for i in range(6)]
     frames = list(synthetic_sequence(poses, roi, size=(160, 120), seed=2))

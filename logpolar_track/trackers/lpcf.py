@@ -95,6 +95,7 @@ from ..geometry import Ellipse
 from ..logpolar import LogPolarGrid, PhaseCorrelator, to_gray
 from ..refine import AppearanceSubspace, similarity_step
 from ..scale_filter import ScaleFilter
+from ..spectra import CoarseFilter, PackedPhaseCorrelator, PackedSpectra
 from .base import Similarity, SimilarityTracker, TrackState, check_ranges, register
 
 
@@ -399,8 +400,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         ys = np.fft.fftfreq(ny, 1.0 / ny)[:, None]
         xs = np.fft.fftfreq(nx, 1.0 / nx)[None, :]
         label = np.exp(-(xs ** 2 + ys ** 2) / (2 * sigma ** 2))
-        self.spectra = _PackedSpectra(ny, nx)
-        # The label is even, so its spectrum is real; stored ready to multiply conj(features) (see _PackedSpectra).
+        self.spectra = PackedSpectra(ny, nx)
+        # The label is even, so its spectrum is real; stored ready to multiply conj(features) (see PackedSpectra).
         self.label_conj = self.spectra.real_spectrum(label)
 
         # On a thin ellipse's grid (rings following its outline, normalised to a circle) a small turn is a shear,
@@ -425,7 +426,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         frequency = np.fft.rfftfreq(self.n_theta)  # cycles per bin
         self._angle_smoothing = np.exp(-(2 * np.pi * frequency * _TURN_SMOOTHING_BINS) ** 2)
         # Packed spectra need even sizes; odd ones keep the plain NumPy correlator.
-        self.packed_correlator = (_PackedPhaseCorrelator(self.correlator)
+        self.packed_correlator = (PackedPhaseCorrelator(self.correlator)
                                   if self.n_rho % 2 == 0 and self.n_theta % 2 == 0 else None)
         d_log_scale = _signed_bins(self.n_rho)[:, None] * self.grid.log_step
         d_angle = _signed_bins(self.n_theta)[None, :] * self.grid.degrees_per_bin
@@ -463,7 +464,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         #: The long-term model (see ``long_term``): the first frame's filter, ready to correlate with patches and, for
         #: its whole-frame search, with the frame.
         self._long_term_parts = self._filter_parts
-        self._long_term_coarse = _CoarseFilter(self._filter_spectra()) if self.long_term else None
+        self._long_term_coarse = CoarseFilter(self._filter_spectra()) if self.long_term else None
         self._long_term_weak = 0  # frames in a row the long-term filter has not recognised the estimate
         self._long_term_due = _LONG_TERM_AFTER  # the count of such frames at which the next search is made
         self._long_term_gap = 0  # frames between the last two searches of the count (0: none yet)
@@ -940,7 +941,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         own) at ``pose``'s scale and angle.
 
         The frame is sampled like a patch (turned, anti-aliased) but over all of it and at half the filter's
-        density, and correlated with the filter reduced alike (:class:`_CoarseFilter`): a coarse map, good to a
+        density, and correlated with the filter reduced alike (:class:`CoarseFilter`): a coarse map, good to a
         sample of the filter or so, of where the object may be. A map wider or taller than ``_SEARCH_PART``
         samples (a small object in a large frame) is searched one overlapping part per call, nearest to
         ``pose`` first. (640 x 480, object radius 25 px: 8 ms on one core when the correlation was made channel by
@@ -958,7 +959,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             coarse = self._long_term_coarse
         else:
             if self._coarse is None:  # made once per filter (see _filter), whatever the parts and searches
-                self._coarse = _CoarseFilter(self._filter_spectra())
+                self._coarse = CoarseFilter(self._filter_spectra())
             coarse = self._coarse
         # Parts overlap by a kernel, so that an object on a part's edge is whole in the next one.
         kernel_h, kernel_w = coarse.shape
@@ -1200,7 +1201,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self.lp_mask = cv2.resize(visibility, (self.n_theta, self.n_rho), interpolation=cv2.INTER_LINEAR)
 
     def _filter(self) -> None:
-        """The filter (:meth:`_filter_spectra`), ready for :meth:`_PackedSpectra.correlate`; its whole-frame
+        """The filter (:meth:`_filter_spectra`), ready for :meth:`PackedSpectra.correlate`; its whole-frame
         search form is made again when next needed."""
         self._filter_parts = self.spectra.multiplier(self._filter_spectra())
         self._coarse = None
@@ -1549,200 +1550,6 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         return grey
 
 
-class _PackedSpectra:
-    """Multi-channel correlation in OpenCV's packed real spectra (CCS), for ``h x w`` images, both even.
-
-    ``cv2.dft`` of a real image returns its half spectrum packed into an ``h x w`` real array: most bins are
-    a (re, im) pair -- adjacent along the row in columns 1 to w-2, adjacent down the column in columns 0 and
-    w-1 -- and the four corners are real. It is about twice as fast as NumPy's real FFT on these sizes.
-    A complex product ``a * x`` of packed spectra is, position by position, ``U * x + V * swap(x)``, where
-    ``swap`` exchanges the members of every pair, ``U`` holds ``re(a)`` at both members and ``V`` holds
-    ``-im(a)`` at the real member and ``+im(a)`` at the imaginary one. A filter ``a`` is turned once into
-    ``(U, swap(V))`` (:meth:`multiplier`); then the response ``sum_c a_c * x_c`` costs two channel sums over
-    contiguous arrays and the swap of one image (:meth:`correlate`).
-    """
-
-    def __init__(self, h: int, w: int):
-        self.shape = (h, w)
-        index = np.arange(h * w).reshape(h, w)
-        swapped = index.copy()
-        for (re, im), (index_re, index_im) in zip(self._pairs(swapped), self._pairs(index)):
-            re[...], im[...] = index_im, index_re
-        self.swap = swapped.ravel()
-        #: +1 at real members of pairs and at the real corners, -1 at imaginary members: packed ``conj``.
-        self.conj_sign = np.ones((h, w), np.float32)
-        for _, im in self._pairs(self.conj_sign):
-            im[...] = -1.0
-
-    @staticmethod
-    def _pairs(x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Views of the real and imaginary members of the pairs of packed spectra ``x`` (..., h, w)."""
-        w = x.shape[-1]
-        edges = x[..., ::w - 1]  # columns 0 and w-1
-        return [(x[..., 1:-1:2], x[..., 2:-1:2]), (edges[..., 1:-1:2, :], edges[..., 2:-1:2, :])]
-
-    def forward(self, images: np.ndarray) -> np.ndarray:
-        """Packed spectra ``(C, h, w)`` float32 of real images ``(C, h, w)``."""
-        out = np.empty(images.shape, np.float32)
-        for image, spectrum in zip(images, out):
-            if image.dtype == np.float32:
-                cv2.dft(image, dst=spectrum)
-            else:
-                spectrum[:] = cv2.dft(image)
-        return out
-
-    def multiplier(self, a: np.ndarray) -> np.ndarray:
-        """``U`` and ``swap(V)`` of packed spectra ``a`` ``(C, h, w)``, stacked and flattened to ``(2, C, h w)``."""
-        parts = np.zeros((2,) + a.shape, np.float32)
-        u, v_swapped = parts
-        u[...] = a
-        for (re, im), (_, u_im), (v_re, v_im) in zip(self._pairs(a), self._pairs(u), self._pairs(v_swapped)):
-            u_im[...] = re
-            v_re[...] = im  # swap(V) holds +im(a) at the real member...
-            np.negative(im, out=v_im)  # ...and -im(a) at the imaginary one
-        return parts.reshape(2, len(a), -1)
-
-    def correlate(self, parts: np.ndarray, spectra: np.ndarray) -> np.ndarray:
-        """Real image ``sum_c a_c * x_c`` (inverse DFT, scaled like ``numpy.fft.irfft2``) of the filter
-        ``parts`` (:meth:`multiplier`) and packed ``spectra`` ``(C, h, w)``."""
-        return cv2.idft(self.product(parts, spectra), flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE)
-
-    def product(self, parts: np.ndarray, spectra: np.ndarray) -> np.ndarray:
-        """Packed ``sum_c a_c * x_c`` ``(h, w)`` of the filter ``parts`` and packed ``spectra`` ``(C, h, w)``."""
-        # Both channel sums in one einsum, without the (C, h w) products (7 channels of 64 x 64: 14.7 against
-        # 18.7 us for multiplying and summing in one measurement, level in another). swap(V) * x summed over
-        # channels, then swapped, equals the sum of V * swap(x).
-        sums = np.einsum("kci,ci->ki", parts, spectra.reshape(len(spectra), -1))
-        packed = sums[0] + sums[1][self.swap]
-        return packed.reshape(self.shape)
-
-    def power(self, x: np.ndarray) -> np.ndarray:
-        """``sum_c |x_c|^2`` ``(h, w)`` of packed spectra ``(C, h, w)``, at both members of every pair (so
-        that packed spectra can be divided by it)."""
-        out = (x * x).sum(axis=0)
-        for re, im in self._pairs(out):
-            re += im
-            im[...] = re
-        return out
-
-    def expand(self, half: np.ndarray) -> np.ndarray:
-        """A real value per bin of NumPy's half spectrum ``(h, w // 2 + 1)``, placed at the packed position(s)
-        of each bin, e.g. to weight packed spectra bin by bin."""
-        h, w = self.shape
-        out = np.empty(self.shape, np.float32)
-        out[:, 1:-1:2] = out[:, 2:-1:2] = half[:, 1:w // 2]
-        for col, j in (0, 0), (w - 1, w // 2):
-            out[0, col], out[h - 1, col] = half[0, j], half[h // 2, j]
-            out[1:-1:2, col] = out[2:-1:2, col] = half[1:h // 2, j]
-        return out
-
-    def real_spectrum(self, image: np.ndarray) -> np.ndarray:
-        """Packed spectrum of a real image that is even (``f(-y, -x) = f(y, x)``, circularly), whose spectrum
-        is therefore real: its values, at both members of every pair, times :attr:`conj_sign`, so that
-        ``result * x`` is the packed ``spectrum * conj(x)``."""
-        packed = cv2.dft(np.asarray(image, np.float64))
-        for re, im in self._pairs(packed):
-            im[...] = re
-        return (packed * self.conj_sign).astype(np.float32)
-
-
-class _PackedPhaseCorrelator:
-    """:class:`~logpolar_track.logpolar.PhaseCorrelator`'s normalised spectra and correlation surfaces for one
-    reference at a time, in packed spectra (even sizes only): the same numbers up to float32 rounding, at
-    about half the cost for one image (the log-polar step runs twice a frame)."""
-
-    def __init__(self, correlator: PhaseCorrelator):
-        self.packed = _PackedSpectra(*correlator.shape)
-        self.window = correlator.window
-        self.window_sum = float(correlator.window.sum())
-        self.weight = self.packed.expand(correlator._scaled_weight)
-
-    def spectrum(self, image: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
-        """Packed spectrum of one log-polar image, windowed and normalised as ``PhaseCorrelator.spectrum``."""
-        window = self.window if mask is None else self.window * mask
-        total = self.window_sum if mask is None else float(window.sum())
-        mean = float((image * window).sum()) / total
-        centred = image - np.float32(mean)
-        centred *= window
-        norm = math.sqrt(float(np.vdot(centred, centred)))
-        if norm <= _FLAT_LOG_POLAR * (abs(mean) + 1.0) * math.sqrt(total):
-            # A flat image: what is left is the float32 mean's rounding, which the normalisation would scale up to
-            # an image that every flat image shares (two flat images were alike at 0.96-0.995, see _likeness).
-            return np.zeros_like(centred)
-        centred /= np.float32(norm + 1e-6)
-        return cv2.dft(centred)
-
-    def reference(self, image: np.ndarray) -> np.ndarray:
-        """A reference image, ready to correlate with (the multiplier of its conjugate spectrum)."""
-        return self.packed.multiplier((self.spectrum(image) * self.packed.conj_sign)[None])
-
-    def correlate(self, reference: np.ndarray, spectrum: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Correlation surface ``(n_rho, n_theta)`` of the image of packed ``spectrum`` against ``reference``, and
-        their packed cross-power spectrum, from which :meth:`plain` makes the plain cross-correlation."""
-        cross = self.packed.product(reference, spectrum[None])
-        whitened = cross * (self.weight / (np.sqrt(self.packed.power(cross[None])) + np.float32(1e-12)))
-        return cv2.idft(whitened, flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE), cross
-
-    @staticmethod
-    def plain(cross: np.ndarray) -> np.ndarray:
-        """``PhaseCorrelator.cross_correlate``'s surface from a packed cross-power spectrum of :meth:`correlate`."""
-        return cv2.idft(cross, flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE)
-
-
-class _CoarseFilter:
-    """A correlation filter for the whole-frame search: for samples twice as far apart as the filter's own, as
-    one correlation kernel per feature channel and their anchor ``(x, y)``, with which a response's peak falls on
-    the object's sample; and the summed correlation of a multi-channel map with them.
-
-    The sum is made in the Fourier domain, the kernels' spectra kept per padded map size: a search of ``C``
-    channels costs ``C`` forward DFTs and one inverse. Equal, within float32 rounding (3e-7 of the response's
-    range), to the sum of ``cv2.filter2D(channel, CV_32F, kernel, anchor, BORDER_CONSTANT)`` over the channels,
-    which took two to three times as long (7 channels, kernels of 17 to 40 samples, maps of 60 x 80 to 512 x 512).
-    """
-
-    def __init__(self, spectra: np.ndarray):
-        """``spectra``: the filter's packed spectra ``(C, h, w)`` (see :class:`_PackedSpectra`)."""
-        ny, nx = spectra.shape[1:]
-        # Even offsets from the patch's centre (nx/2, ny/2) survive the halving, so the anchor is a sample.
-        y0, x0 = (ny // 2) % 2, (nx // 2) % 2
-        halve = np.array([0.25, 0.5, 0.25], np.float32)
-        self.kernels = []
-        for spectrum in spectra:
-            # The filter convolves circularly; a correlation kernel is h(-k mod n).
-            kernel = np.roll(cv2.flip(cv2.idft(spectrum, flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE), -1), 1, (0, 1))
-            kernel = cv2.sepFilter2D(kernel, -1, halve, halve, borderType=cv2.BORDER_CONSTANT)
-            self.kernels.append(np.ascontiguousarray(kernel[y0::2, x0::2]))
-        self.anchor = ((nx // 2 - x0) // 2, (ny // 2 - y0) // 2)
-        self.shape = self.kernels[0].shape  # (rows, columns) of each kernel
-        self._kernel_spectra: dict[tuple[int, int], list[np.ndarray]] = {}
-
-    def response(self, maps: np.ndarray) -> np.ndarray:
-        """``sum_c`` of the correlation of ``maps[c]`` (``(C, H, W)`` float32) with kernel ``c``, zero beyond the
-        maps' edges: ``(H, W)`` float32, as ``cv2.filter2D`` with :attr:`anchor` and ``BORDER_CONSTANT``."""
-        height, width = maps.shape[1:]
-        kernel_h, kernel_w = self.shape
-        # Padded so that the circular correlation never wraps a map's far edge onto its near one.
-        size = cv2.getOptimalDFTSize(height + kernel_h - 1), cv2.getOptimalDFTSize(width + kernel_w - 1)
-        kernel_spectra = self._kernel_spectra.pop(size, None)
-        if kernel_spectra is None:
-            kernel_spectra = [cv2.dft(cv2.copyMakeBorder(kernel, 0, size[0] - kernel_h, 0, size[1] - kernel_w,
-                                                         cv2.BORDER_CONSTANT))
-                              for kernel in self.kernels]
-            if len(self._kernel_spectra) >= _KERNEL_SPECTRA_KEPT:
-                del self._kernel_spectra[next(iter(self._kernel_spectra))]  # the least recently used
-        self._kernel_spectra[size] = kernel_spectra  # (re)inserted last: dicts keep insertion order
-        padded = np.zeros(size, np.float32)
-        total = None
-        for image, kernel_spectrum in zip(maps, kernel_spectra):
-            padded[:height, :width] = image
-            product = cv2.mulSpectrums(cv2.dft(padded), kernel_spectrum, 0, conjB=True)
-            total = product if total is None else cv2.add(total, product, dst=total)
-        full = cv2.idft(total, flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE)
-        # The circular correlation c[n] = sum_m k[m] s[n + m]; the anchored one at (x, y) is c[x - ax, y - ay].
-        anchor_x, anchor_y = self.anchor
-        return np.roll(full, (anchor_y, anchor_x), (0, 1))[:height, :width]
-
-
 #: Gradient refinement (see ``_refine``): the appearance patch covers the ROI's ellipse enlarged this much, and
 #: the refinement may move the estimate at most this far from the log-polar/filter estimate.
 _REFINE_EXTENT = 1.0
@@ -1831,10 +1638,6 @@ _SEARCH_POSE_PSR = 1.3
 #: semi-axis alone) 0.4868 but the twin taken; 3 + 1 a frame 0.4811; "near the edge" at 4 semi-axes lost
 #: freeman1's box start (0.471 -> 0.307), at 1 the same as at 2.
 _SEARCH_REACH, _SEARCH_REACH_PER_FRAME, _SEARCH_REACH_SPEED, _SEARCH_REACH_EDGE = 2.0, 0.25, 1.5, 2.0
-#: Padded sizes whose kernel spectra a whole-frame search filter keeps, the least recently used dropped first. The
-#: long-term filter lives as long as the track, and a drifting scale gives each search new map sizes: kept without
-#: a bound, freeman1's 325 frames had left 32 sizes (56 MB) in it, and a part of a large frame takes about 10 MB.
-_KERNEL_SPECTRA_KEPT = 6
 #: A prediction further than this many samples from the last place is checked against the last place itself, and
 #: against the place as far behind it, when a confident track turns weak there (see ``_estimate``). A disc of radius
 #: 40 px bouncing off the frame's walls, 10 seeds, frames tracked: at 50 px a frame 100 % (93.2 % without the check,
@@ -2067,8 +1870,6 @@ _SIMILARITY_POWER = 4
 #: degrees at most 5.7 off (3.0 when read).
 _TURN_UNSEEN = 0.02
 _TURN_SMOOTHING_BINS = 2.0
-#: A log-polar image whose windowed variation is below this fraction of its level is flat (no structure at all).
-_FLAT_LOG_POLAR = 1e-5
 
 
 #: Parameters that must be above their lower bound of 0, not equal to it (rates, widths, limits).

@@ -166,6 +166,10 @@ def test_data_format_follows_the_csv_extension_unless_given(tiny_video, workdir)
     assert Path("t.txt").read_text().splitlines()[0] == HEADER
     assert invoke(tiny_video.path, "--no-video", "--csv", "u.txt", "--format", "jsonl").exit_code == 0
     assert json.loads(Path("u.txt").read_text().splitlines()[0])["frame"] == 0
+    # --format wins over a name that says the other format, with a note saying so.
+    against = invoke(tiny_video.path, "--no-video", "--csv", "v.csv", "--format", "jsonl")
+    assert against.exit_code == 0 and json.loads(Path("v.csv").read_text().splitlines()[0])["frame"] == 0
+    assert "note: writing JSON lines to 'v.csv' (--format jsonl), whose name says CSV" in against.stderr
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/null"), reason="needs /dev/null")

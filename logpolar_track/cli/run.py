@@ -59,6 +59,10 @@ class TrackerChoice(click.Choice):
                   f"{', '.join(self.choices)}", param, ctx)
 
 
+#: What each of FORMATS is called in messages.
+_FORMAT_NAMES = {"csv": "CSV", "jsonl": "JSON lines"}
+
+
 def _tracker_lines() -> str:
     """One wrapped entry per registered tracker, from the registry's summaries."""
     lines = []
@@ -174,8 +178,13 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     existing files are kept unless --overwrite is given.
     """
     roi = None if roi_spec is None else parse_roi_option(roi_spec)
+    suffix = Path(csv_out).suffix.lower() if csv_out else ""
     if data_format is None:
-        data_format = "jsonl" if csv_out and Path(csv_out).suffix.lower() == FORMATS["jsonl"] else "csv"
+        data_format = "jsonl" if suffix == FORMATS["jsonl"] else "csv"
+    elif suffix in FORMATS.values() and suffix != FORMATS[data_format] and not quiet:
+        # As ffmpeg's -f, --format wins over the name; but a name that says otherwise misleads whoever opens it.
+        click.echo(f"lptrack: note: writing {_FORMAT_NAMES[data_format]} to '{csv_out}' (--format {data_format}), "
+                   f"whose name says {_FORMAT_NAMES[next(k for k, v in FORMATS.items() if v == suffix)]}", err=True)
     if no_video and video_out is not None:
         raise UsageError("--out and --no-video contradict each other; give one of them")
     if overwrite and skip_existing:

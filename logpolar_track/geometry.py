@@ -233,13 +233,16 @@ def check_roi_fits(roi: Ellipse, width: int, height: int, *, source: str | None 
                    min_inside: float = 0.5, min_radius: float = 2.0) -> None:
     """Raise :class:`RoiError` unless ``roi`` is usable on a ``width`` x ``height`` frame.
 
-    A ROI may hang over the border (trackers pad the frame), but its centre must lie in the frame, at least
+    A ROI may hang over the border (trackers pad the frame), but its centre must lie in the frame (within its
+    outermost pixel centres: 0 to ``width - 1``, 0 to ``height - 1``), at least
     ``min_inside`` of its area must be inside, and its smaller semi-axis must be at least ``min_radius`` pixels.
     """
     where = f"the {width}x{height} frame" + ("" if source is None else f" of {source}")
-    if not (0 <= roi.cx < width and 0 <= roi.cy < height):
+    # Within the outermost pixel centres, as trackers require of every estimate they report tracked (a centre
+    # between them and the frame's edge was accepted here and then reported lost on every frame).
+    if not (0 <= roi.cx <= width - 1 and 0 <= roi.cy <= height - 1):
         raise RoiError(f"ROI centre ({_fmt(roi.cx)}, {_fmt(roi.cy)}) lies outside {where}; "
-                       f"give a centre with 0 <= cx < {width} and 0 <= cy < {height}")
+                       f"give a centre with 0 <= cx <= {width - 1} and 0 <= cy <= {height - 1}")
     if min(roi.a, roi.b) < min_radius:
         raise RoiError(f"ROI {roi.to_spec()} is too small to track: semi-axes must be >= {min_radius:g} pixels")
     inside = roi.fraction_inside(width, height)

@@ -25,6 +25,10 @@ import cv2
 import numpy as np
 
 
+#: cv2.remap's limit on the rows of its maps (SHRT_MAX, exclusive).
+_REMAP_MAX_ROWS = 32767
+
+
 @dataclass(frozen=True)
 class LogPolarGrid:
     """Sampling pattern of a log-polar image over an ellipse of semi-axes ``a`` x ``b`` pixels.
@@ -110,10 +114,18 @@ class LogPolarGrid:
         """
         centres = np.asarray(centres, dtype=np.float32).reshape(-1, 2)
         dx, dy = self.pixel_offsets(scale, angle_deg)
-        map_x = (centres[:, 0, None, None] + dx[None]).reshape(-1, self.n_theta)
-        map_y = (centres[:, 1, None, None] + dy[None]).reshape(-1, self.n_theta)
-        out = cv2.remap(gray, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        return out.reshape(len(centres), self.n_rho, self.n_theta)
+        out = np.empty((len(centres), self.n_rho, self.n_theta), np.float32)
+        # One remap for many centres, their images stacked as rows; cv2.remap takes maps of under 32767 rows
+        # (a 23 x 23 window of 64-ring images has 33,856).
+        per_call = max(1, (_REMAP_MAX_ROWS - 1) // self.n_rho)
+        for first in range(0, len(centres), per_call):
+            part = centres[first:first + per_call]
+            map_x = (part[:, 0, None, None] + dx[None]).reshape(-1, self.n_theta)
+            map_y = (part[:, 1, None, None] + dy[None]).reshape(-1, self.n_theta)
+            out[first:first + len(part)] = cv2.remap(gray, map_x, map_y, cv2.INTER_LINEAR,
+                                                     borderMode=cv2.BORDER_REPLICATE).reshape(len(part), self.n_rho,
+                                                                                              self.n_theta)
+        return out
 
 
 def rfft2_float32(images: np.ndarray) -> np.ndarray:

@@ -281,7 +281,7 @@ BAD = {
     "roi-negative-radius": (None, ["--roi", "80,60,-5"], 2, ["> 0", "cx,cy,r"]),
     "roi-zero-radius": (None, ["--roi", "80,60,0"], 2, ["> 0", "cx,cy,r"]),
     "roi-mostly-outside": (None, ["--roi", "159,119,30"], 2, ["mostly outside", "160x120", "tiny.mp4"]),
-    "roi-centre-outside": (None, ["--roi", "200,60,10"], 2, ["outside", "0 <= cx < 160"]),
+    "roi-centre-outside": (None, ["--roi", "200,60,10"], 2, ["outside", "0 <= cx <= 159"]),
     "unknown-tracker": (None, ["--tracker", "nosuch"], 2, ["nosuch", tracker_names()[0]]),
     "start-frame-past-end": (None, ["--start-frame", "99"], 2, ["past the end", "20 frames"]),
     "missing-output-folder": (None, ["--out", "missing/out.mp4"], 1, ["missing", "does not exist"]),

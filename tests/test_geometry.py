@@ -79,7 +79,9 @@ def test_check_roi_fits_accepts_roi_partly_over_border():
     (Ellipse.circle(50, -1, 10), "lies outside"),
     (Ellipse.circle(1, 1, 40), "lies mostly outside"),
     (Ellipse(50, 50, 10, 1, 0), "too small"),
-], ids=["centre-right", "centre-above", "mostly-outside", "too-thin"])
+    # Beyond the last pixel centre: trackers report such a centre lost on every frame.
+    (Ellipse.circle(99.4, 50, 10), "give a centre with 0 <= cx <= 99 and 0 <= cy <= 99"),
+], ids=["centre-right", "centre-above", "mostly-outside", "too-thin", "beyond-last-pixel"])
 def test_check_roi_fits_rejects(roi, fragment):
     with pytest.raises(RoiError, match=fragment.replace("(", r"\(").replace(")", r"\)")):
         check_roi_fits(roi, 100, 100, source="a.mp4")

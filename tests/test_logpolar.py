@@ -114,6 +114,17 @@ def test_sample_batch_equals_one_by_one(image):
         assert np.array_equal(batch[i], grid.sample(image, c, 1.3, 20.0)[0])
 
 
+def test_sample_of_more_centres_than_one_remap_takes(image):
+    """cv2.remap refuses maps of 32767 rows or more: 23 x 23 centres of 64 rings are sampled in parts, the same."""
+    grid = LogPolarGrid(20.0, 15.0, n_rho=64, n_theta=32)
+    offsets = np.stack(np.meshgrid(np.arange(-11, 12), np.arange(-11, 12)), axis=-1).reshape(-1, 2)
+    centres = np.array([95.0, 97.0]) + 0.5 * offsets
+    batch = grid.sample(image, centres, 1.1, 30.0)
+    assert len(centres) * grid.n_rho >= 32767 and batch.shape == (len(centres), 64, 32)
+    for i in (0, 511, 512, len(centres) - 1):
+        assert np.array_equal(batch[i], grid.sample(image, centres[i], 1.1, 30.0)[0])
+
+
 def test_spectrum_matches_textbook_fft(image):
     """The optimised forward FFT equals numpy's rfft2 of the windowed, normalised image."""
     grid = LogPolarGrid(RADIUS, RADIUS, n_rho=32, n_theta=64)

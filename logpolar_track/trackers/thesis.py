@@ -337,8 +337,9 @@ class TemplateUpdateTracker(FixedTemplateTracker):
     Parameters
     ----------
     update_threshold : float
-        Match height (0 to 1) of the first template at the accepted estimate above which the current template
-        is renewed from that frame; below it the first template no longer vouches for the estimate.
+        Match height (0 to 1) of the first template above which the current template is renewed from the
+        frame, where the first template's own estimate is the accepted one (within a pixel, a ring and a
+        direction of the log-polar grid); otherwise the first template no longer vouches for the estimate.
     **kwargs
         ``window``, ``n_rho``, ``n_theta``, ``lost_threshold``, ``coarse``: as for ``fixed``.
     """
@@ -367,12 +368,18 @@ class TemplateUpdateTracker(FixedTemplateTracker):
         else:
             from_initial = self._search(gray, last)
             from_current = self._search(gray, last, self.current_template)
-        self._initial_score = from_initial.score
+        self._from_initial = from_initial
         return from_initial if from_initial.score >= from_current.score else from_current
 
     def _accept(self, estimate: Similarity) -> None:
-        # Renew only when the anchor (first template) still agrees: this is what keeps it from drifting.
-        if self._initial_score >= self.update_threshold:
+        # Renew only when the anchor (first template) vouches for the estimate -- matches above the threshold,
+        # and there: this is what keeps the current template from drifting.
+        anchor = self._from_initial
+        grid = self.matcher.grid
+        if (anchor.score >= self.update_threshold
+                and math.hypot(anchor.cx - estimate.cx, anchor.cy - estimate.cy) <= 1.0
+                and abs(math.log(anchor.scale / estimate.scale)) <= grid.log_step
+                and abs(anchor.rotation_deg - estimate.rotation_deg) <= grid.degrees_per_bin):
             centre = np.array([[estimate.cx, estimate.cy]])
             self.current_template = self.matcher.spectra(self._gray, centre, estimate.scale, self._angle(estimate))
             if self.coarse_matcher is not None:

@@ -273,3 +273,16 @@ def wrap_degrees(angle: float) -> float:
     elif wrapped <= -180.0:
         wrapped += 360.0
     return wrapped
+
+
+def rotate_screen(vectors, angle_deg: float) -> np.ndarray:
+    """Pixel vectors ``(x, y)`` (y down), one ``(2,)`` or many ``(N, 2)``, turned ``angle_deg`` counter-clockwise
+    as seen on screen; a new float array of the same shape."""
+    t = math.radians(angle_deg)
+    c, s = math.cos(t), math.sin(t)
+    vectors = np.asarray(vectors, dtype=np.float64)
+    if vectors.shape == (2,):  # trackers turn one vector at a time several times a frame: no stacking
+        x, y = float(vectors[0]), float(vectors[1])
+        return np.array([x * c + y * s, -x * s + y * c])
+    x, y = vectors[..., 0], vectors[..., 1]
+    return np.stack([x * c + y * s, -x * s + y * c], axis=-1)

@@ -59,6 +59,8 @@ class LogPolarGrid:
     n_theta: int = 128
     inner_px: float = 1.0
     offsets: np.ndarray = field(init=False, repr=False, compare=False)
+    #: The rings' radii ``(n_rho,)`` as fractions of the ellipse's own radius in each direction (log-spaced, last 1).
+    rho: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if not (self.a > 0 and self.b > 0 and math.isfinite(self.a * self.b)):
@@ -173,10 +175,12 @@ def within_0_255(frame: np.ndarray) -> np.ndarray:
 class PhaseCorrelator:
     """Batched FFT phase correlation of log-polar images of one shape.
 
-    Images are brought to zero mean, multiplied by a Hann window along the (non-periodic) log-radius axis and
-    scaled to unit L2 norm, and transformed with real FFTs in float32. The normalised cross-power spectrum is
-    weighted by a Gaussian low-pass of width ``lowpass`` (in cycles per sample; ``None`` for pure phase
-    correlation), which suppresses noisy high frequencies and gives the peak a smooth shape for sub-bin fitting.
+    Images have their window-weighted mean taken off (so the windowed image has no DC term at all), are
+    multiplied by a Hann window along the (non-periodic) log-radius axis and scaled to unit L2 norm, and
+    transformed with real FFTs in float32. The normalised cross-power spectrum is weighted by a Gaussian
+    low-pass of width ``lowpass`` (in cycles per sample), which suppresses noisy high frequencies and gives the
+    peak a smooth shape for sub-bin fitting. ``None`` gives pure phase correlation, whose peak is one bin wide:
+    its sub-bin offsets (:func:`find_peaks`) are then not to be trusted (a 1-bin shift read as 0.35 bin).
 
     Parameters
     ----------

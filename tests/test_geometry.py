@@ -3,6 +3,7 @@
 
 import math
 
+import numpy as np
 import pytest
 
 from logpolar_track.errors import RoiError
@@ -169,3 +170,12 @@ def test_same_outline_however_written():
     assert not e.same_outline(Ellipse(10.1, 20.0, 30.0, 15.0, 200.0))
     assert not e.same_outline(Ellipse(10.0, 20.0, 30.1, 15.0, 200.0))
     assert not e.same_outline(Ellipse(10.0, 20.0, 30.0, 15.0, 201.0))
+
+
+def test_rotate_screen_turns_counter_clockwise_on_screen():
+    from logpolar_track.geometry import rotate_screen
+
+    # +x turned a quarter turn counter-clockwise on screen points up: negative y (y down).
+    assert rotate_screen((1.0, 0.0), 90.0) == pytest.approx([0.0, -1.0])
+    many = rotate_screen(np.array([[1.0, 0.0], [0.0, 2.0]]), 90.0)
+    assert many.shape == (2, 2) and many == pytest.approx(np.array([[0.0, -1.0], [2.0, 0.0]]))

@@ -91,7 +91,7 @@ import numpy as np
 from ..colour import ColourLikelihood
 from ..errors import UsageError
 from ..features import patch_features
-from ..geometry import Ellipse
+from ..geometry import Ellipse, rotate_screen
 from ..logpolar import LogPolarGrid, PhaseCorrelator, to_gray
 from ..refine import AppearanceSubspace, similarity_step
 from ..scale_filter import ScaleFilter
@@ -1245,12 +1245,12 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         """A move of ``(d_across, d_down)`` samples along the patch's axes at ``state`` as ``(dx, dy)`` pixels on
         screen (y down)."""
         step, scale = self.step, state.scale
-        return _rotate_screen((d_across * step * scale, d_down * step * scale), self._axes_deg(state))
+        return rotate_screen((d_across * step * scale, d_down * step * scale), self._axes_deg(state))
 
     def _pixels_to_samples(self, dx: float, dy: float, state: Similarity) -> np.ndarray:
         """The inverse of :meth:`_samples_to_pixels`: a move of ``(dx, dy)`` pixels on screen as ``(d_across,
         d_down)`` samples along the patch's axes at ``state``."""
-        return _rotate_screen((dx, dy), -self._axes_deg(state)) / (self.step * state.scale)
+        return rotate_screen((dx, dy), -self._axes_deg(state)) / (self.step * state.scale)
 
     def _patch_matrix(self, state: Similarity, size: tuple[int, int]) -> np.ndarray:
         """The affine map ``(2, 3)`` from samples of a patch of ``size`` ``(nx, ny)`` at ``state`` to frame pixels
@@ -1949,14 +1949,6 @@ def _dft_size(value: float) -> int:
     while down > 8 and cv2.getOptimalDFTSize(down) != down:
         down -= 2
     return down if value - down < up - value else up
-
-
-def _rotate_screen(vector, angle_deg: float) -> np.ndarray:
-    """``vector`` ``(x, y)`` (y down) turned ``angle_deg`` counter-clockwise on screen, as an array."""
-    x, y = float(vector[0]), float(vector[1])
-    t = math.radians(angle_deg)
-    c, s = math.cos(t), math.sin(t)
-    return np.array([x * c + y * s, -x * s + y * c])
 
 
 def _peak_offset(response: np.ndarray) -> tuple[int, int, float, float, float]:

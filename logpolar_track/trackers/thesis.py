@@ -25,7 +25,7 @@ from abc import abstractmethod
 import numpy as np
 
 from ..errors import UsageError
-from ..geometry import Ellipse, wrap_degrees
+from ..geometry import Ellipse, rotate_screen, wrap_degrees
 from ..logpolar import LogPolarGrid, PhaseCorrelator, Peak, find_peaks, parabola_peak_2d
 from .base import MAX_WINDOW, Similarity, SimilarityTracker, check_ranges, register
 
@@ -76,14 +76,6 @@ def window_offsets(window: int) -> np.ndarray:
     half = window // 2
     ys, xs = np.mgrid[-half:half + 1, -half:half + 1]
     return np.stack([xs.ravel(), ys.ravel()], axis=1).astype(np.float32)
-
-
-def rotate_screen(vectors: np.ndarray, angle_deg: float) -> np.ndarray:
-    """Pixel vectors ``(N, 2)`` (y down) turned ``angle_deg`` counter-clockwise as seen on screen."""
-    t = math.radians(angle_deg)
-    c, s = math.cos(t), math.sin(t)
-    x, y = vectors[:, 0], vectors[:, 1]
-    return np.stack([x * c + y * s, -x * s + y * c], axis=1)
 
 
 class _CellSpectra:
@@ -324,7 +316,7 @@ class DifferenceDecompositionTracker(_WindowSearch):
             peak = take(peak, best)
         # The current sample looks like the template sampled `offset` away from the object's centre, in the
         # object's own frame at scale 1: the object is that offset back, scaled and turned into the image.
-        motion = -rotate_screen(offset[None, :], last.rotation_deg)[0] * last.scale
+        motion = -rotate_screen(offset, last.rotation_deg) * last.scale
         ds, dr = self.matcher.to_change(peak, 0)
         return self._refine(self.matcher, gray, last.cx + motion[0], last.cy + motion[1],
                             last.scale * ds, last.rotation_deg + dr)

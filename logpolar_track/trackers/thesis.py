@@ -199,10 +199,11 @@ class _WindowSearch(SimilarityTracker):
             if best == current or grid.ravel()[best] <= grid.ravel()[current]:
                 break
             current = best
-        return current, self._offset(grid, current)
+        return current, self._offset(grid)
 
-    def _offset(self, grid: np.ndarray, best: int) -> np.ndarray:
-        """Sub-pixel offset ``(dx, dy)`` of cell ``best`` from the window's centre (parabola through neighbours)."""
+    def _offset(self, grid: np.ndarray) -> np.ndarray:
+        """Sub-pixel offset ``(dx, dy)`` from the window's centre of the best cell of ``grid`` ``(window, window)``
+        (parabolas through its neighbours)."""
         row, col, _ = parabola_peak_2d(grid)
         half = self.window // 2
         return np.array([col - half, row - half], dtype=np.float64)
@@ -219,11 +220,7 @@ class _WindowSearch(SimilarityTracker):
 
     def _best_cell(self, heights: np.ndarray) -> tuple[int, np.ndarray]:
         """Index of the best candidate and its sub-pixel offset ``(dx, dy)`` from the parabola fit."""
-        grid = heights.reshape(self.window, self.window)
-        row, col, _ = parabola_peak_2d(grid)
-        best = int(np.argmax(heights))
-        half = self.window // 2
-        return best, np.array([col - half, row - half], dtype=np.float64)
+        return int(np.argmax(heights)), self._offset(heights.reshape(self.window, self.window))
 
 
 @register

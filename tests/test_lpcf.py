@@ -1427,3 +1427,19 @@ def test_shrinking_patches_sample_like_a_full_size_blur(scale, angle_deg):
 def test_parameters_out_of_range_are_refused_with_the_range(params, fragment):
     with pytest.raises(UsageError, match=re.escape(fragment)):
         create_tracker("lpcf", **params)
+
+
+def test_a_roi_on_a_flat_area_is_lost_not_a_crash():
+    """A ROI on the black bar of a letterboxed video: object and surround are one colour, and the colour map's
+    direction was 0/0, whose NaN reached the features' bin index (IndexError) after a few frames."""
+    import warnings
+
+    frame = np.zeros((480, 640, 3), np.uint8)
+    frame[:, 320:] = np.random.default_rng(0).integers(0, 255, (480, 320, 3))
+    tracker = create_tracker("lpcf")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no NaN on the way either
+        tracker.init(frame, Ellipse.circle(100, 240, 40))
+        results = [tracker.update(frame) for _ in range(40)]
+    assert not any(ok for ok, _ in results)
+    assert all(state.centre == (100.0, 240.0) and state.score == 0.0 for _, state in results)

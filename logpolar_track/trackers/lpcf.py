@@ -1429,6 +1429,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         difference = inside.mean(axis=0) - around.mean(axis=0)
         spread = 0.5 * (np.cov(inside.T) + np.cov(around.T)) + _GREY_NOISE ** 2 * np.eye(3)
         best = np.linalg.solve(spread, difference)
+        if not best.any():
+            return None  # the same colour inside and around (a flat area): no direction separates them
 
         def contrast(weights):
             return abs(weights @ difference) / math.sqrt(weights @ spread @ weights)

@@ -518,3 +518,13 @@ def test_thesis_trackers_read_small_turns_of_a_small_object(name):
     frames = list(synthetic_sequence(poses, roi, size=(320, 240), seed=1))
     _, scale, rotation, lost = errors(track(name, roi, frames), poses)
     assert lost == 0 and rotation.mean() <= 1.0 and scale.mean() <= 0.02
+
+
+def test_mil_refuses_a_box_it_would_hang_on():
+    """OpenCV's MIL never returns from update() on a 4 x 4 px box (and deaf to signals while in it)."""
+    if not tracker_class("cv-mil").available():
+        pytest.skip("cv2.TrackerMIL not in this build")
+    frame = random_texture(120, 160, np.random.default_rng(0))
+    with pytest.raises(RoiError, match="cv-mil cannot start on a box under 5 px a side .the ROI's is 4x4 px."):
+        create_tracker("cv-mil").init(frame, Ellipse.circle(80, 60, 2))
+    create_tracker("cv-mil").init(frame, Ellipse.circle(80, 60, 3))  # 6 x 6 px: starts

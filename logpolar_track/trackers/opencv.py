@@ -44,6 +44,8 @@ class _OpenCVTracker(Tracker):
 
     measures_rotation = False
     _cv_class = ""
+    #: Least side in pixels of the box the OpenCV tracker is started on.
+    _min_box_px = 1
 
     def __init__(self, *, seed: int = 0):
         self.seed = int(seed)
@@ -84,6 +86,10 @@ class _OpenCVTracker(Tracker):
         x0, y0 = min(max(int(round(x)), 0), width - 1), min(max(int(round(y)), 0), height - 1)
         x1, y1 = min(int(round(x + w)), width), min(int(round(y + h)), height)
         box = (x0, y0, max(x1 - x0, 1), max(y1 - y0, 1))
+        if min(box[2], box[3]) < self._min_box_px:
+            raise RoiError(f"{self.name} cannot start on a box under {self._min_box_px} px a side (the ROI's is "
+                           f"{box[2]}x{box[3]} px): OpenCV's {self._cv_class} may never return on one; give a larger "
+                           "ROI or another tracker")
         import cv2
 
         # A fixed seed of OpenCV's per-thread RNG, which MIL samples with: runs repeat from process to process (see
@@ -149,6 +155,9 @@ class MILTracker(_OpenCVTracker):
     name = "cv-mil"
     summary = "OpenCV MIL (peer; box only, no rotation)"
     _cv_class = "TrackerMIL"
+    # OpenCV 5.1's MIL loops for ever (at full CPU, deaf to signals inside the native call) on small boxes: on
+    # noise, 4x4, 3x5, 3x3, 2x9, 1x20 px never returned; 4x5, 3x6, 20x3 and every box of 5 px a side or more did.
+    _min_box_px = 5
 
 
 @register

@@ -169,7 +169,8 @@ def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None,
     inputs : iterable of str
         Video files (kept even if missing: they fail as videos later, without stopping the others), folders
         (searched recursively for :func:`is_video_name` files, sorted by path) and ``-`` (one path per line
-        from ``stdin``; blank lines and lines starting with ``#`` ignored). A video named again (the same
+        from ``stdin``, blank lines and lines starting with ``#`` ignored; or, where the text holds a NUL, as
+        ``find -print0`` writes, the paths between NULs exactly as written). A video named again (the same
         :func:`video_key`: a file also found in a folder given, a line repeated) is kept once, where it came
         first; links to one file are different videos.
     stdin : text stream, optional
@@ -202,10 +203,14 @@ def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None,
             if read_stdin:
                 raise UsageError("'-' (video paths on standard input) can be given only once")
             read_stdin = True
-            for line in (stdin if stdin is not None else sys.stdin):
-                line = line.strip()
-                if line and not line.startswith("#"):
-                    add(VideoInput(Path(line)))
+            listing = (stdin if stdin is not None else sys.stdin).read()
+            if "\0" in listing:  # find -print0: names exactly as written, NUL after each
+                names = [name for name in listing.split("\0") if name.strip("\n")]
+            else:
+                names = [line.strip() for line in listing.splitlines()]
+                names = [name for name in names if name and not name.startswith("#")]
+            for name in names:
+                add(VideoInput(Path(name)))
             continue
         path = Path(text)
         if path.is_dir():

@@ -388,6 +388,14 @@ def test_find_videos_sorts_and_skips_outputs_and_hidden_files(tmp_path):
     assert found == [VideoInput(tmp_path / "a.MOV", tmp_path), VideoInput(tmp_path / "b/x.mp4", tmp_path)]
 
 
+def test_find_videos_reads_find_print0_from_stdin():
+    """``find . -print0 | lptrack run -``: paths between NULs, exactly as written (a space, a '#', a newline
+    inside a name are its own); it gave a traceback (embedded null byte)."""
+    listing = "./a b.mp4\0#c.mp4\0./new\nline.mp4\0"
+    found = find_videos(["-"], stdin=io.StringIO(listing))
+    assert found == [VideoInput(Path("./a b.mp4")), VideoInput(Path("#c.mp4")), VideoInput(Path("./new\nline.mp4"))]
+
+
 def test_a_shell_glob_does_not_track_lptracks_own_videos_beside_their_sources(tmp_path):
     """``lptrack run *.mp4`` in a folder already run named clip.lptrack.mp4 too: tracked again, it wrote
     clip.lptrack.lptrack.mp4, one more each run. Named beside its source it is skipped, with a note; alone, or

@@ -33,9 +33,10 @@ from typing import Iterator
 
 import numpy as np
 
-from .errors import InputError, RoiError, UsageError, VideoError
+from .errors import InputError, UsageError, VideoError
 from .evaluate import GroundTruth, GroundTruthError, read_box_text, read_gt_csv
-from .geometry import Ellipse, parse_roi
+from .geometry import Ellipse
+from .pipeline import read_roi_sidecar
 
 #: Frame rate assumed for image sequences (OTB and VOT are mostly 30 fps captures), frames per second.
 IMAGE_FPS = 30.0
@@ -157,7 +158,8 @@ def _video_info(path: Path) -> tuple[int, float]:
 
 
 def video_sequence(video: Path, gt_path: Path | None = None) -> Sequence:
-    """The lptrack sample ``video`` with its ``<stem>.gt.csv`` and optional ``<stem>.roi`` sidecars.
+    """The lptrack sample ``video`` with its ``<stem>.gt.csv`` and optional ``.roi`` sidecar
+    (:func:`~logpolar_track.pipeline.read_roi_sidecar`).
 
     Raises
     ------
@@ -169,13 +171,8 @@ def video_sequence(video: Path, gt_path: Path | None = None) -> Sequence:
     gt_path = Path(gt_path) if gt_path else video.with_name(stem + ".gt.csv")
     gt = read_gt_csv(gt_path)
     n, fps = _video_info(video)
-    roi_path = video.with_name(stem + ".roi")
-    if roi_path.is_file():
-        text = roi_path.read_text(encoding="utf-8").strip().splitlines()
-        try:
-            roi = parse_roi(text[0] if text else "")
-        except RoiError as exc:
-            raise RoiError(f"{roi_path}: {exc}") from None
+    roi = read_roi_sidecar(video)  # as lptrack run reads it
+    if roi is not None:
         start = 0
     else:
         roi, start = gt.initial_roi(), gt.first_valid

@@ -58,8 +58,8 @@ def read_roi_sidecar(video_path) -> Ellipse | None:
     """The initial ROI stored next to a video, or None if there is no sidecar.
 
     The sidecar is ``<folder>/<stem>.roi`` (e.g. ``spin.roi`` for ``spin.mp4``) or ``<video file name>.roi``
-    (``spin.mp4.roi``): one line in ``--roi`` syntax. ``#`` starts a comment, to the end of its line; blank
-    lines are ignored.
+    (``spin.mp4.roi``): one line in ``--roi`` syntax, UTF-8 (a byte-order mark is allowed). ``#`` starts a
+    comment, to the end of its line; blank lines are ignored.
 
     Raises
     ------
@@ -74,7 +74,7 @@ def read_roi_sidecar(video_path) -> Ellipse | None:
         if not candidate.is_file():
             continue
         try:
-            text = candidate.read_text(encoding="utf-8")
+            text = candidate.read_text(encoding="utf-8-sig")  # Windows editors may start it with a BOM
         except (OSError, UnicodeDecodeError) as exc:
             raise LptrackError(f"cannot read ROI file '{candidate}': {exc}") from None  # unreadable input: exit 1
         lines = [(n, ln.split("#", 1)[0].strip()) for n, ln in enumerate(text.splitlines(), start=1)]

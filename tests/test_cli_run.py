@@ -778,3 +778,11 @@ def test_a_frame_rate_that_is_not_a_positive_number_is_refused(tiny_video, image
         assert result.stderr == (f"lptrack: error: the frame rate must be a positive number of frames per second, "
                                  f"from 0.001 to 1,000,000, got {float(rate):g}\n")
         assert listing(workdir) == []
+
+
+def test_a_roi_sidecar_saved_with_a_byte_order_mark_is_read(tiny_video, workdir):
+    """Notepad saves UTF-8 with a BOM; it showed as an invisible character in 'is not a list of numbers'."""
+    tiny_video.path.with_suffix(".roi").write_text("\ufeff80,60,20\r\n", encoding="utf-8")
+    result = invoke(tiny_video.path, "--no-video", "--csv", "-", "--frames", "2")
+    assert result.exit_code == 0, result.stderr
+    assert read_rows(result.stdout)[0]["cx"] == "80.000"

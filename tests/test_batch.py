@@ -442,13 +442,19 @@ def test_outputs_never_collide(work):
 
 @pytest.mark.parametrize("args, fragment", [
     (("footage/day1", "--out", "x.mp4"), "--out names one video's output"),
-    (("footage/day1", "--csv", "all.csv"), "--csv names one video's output"),
+    (("footage/day1", "--csv", "all.csv"), "--csv names one video's output in this process; with a folder give"),
+    (("footage/day1/a.mp4", "footage/day1/b.mp4", "--csv", "all.csv"), "; with several videos give --out-dir"),
+    (("--roi-file", "one.csv", "--csv", "o.csv"), "--csv names one video's output in this process; with --roi-file"),
+    # The ROI file's own error comes first.
+    (("--roi-file", "bad.csv", "--csv", "o.csv"), "ROI file 'bad.csv'"),
     (("footage/day1", "--csv", "-", "--skip-existing"), "--skip-existing needs outputs in files"),
     (("footage/day1", "--overwrite", "--skip-existing"), "contradict each other"),
     ((), "give a VIDEO"),
     (("footage/day1", "--jobs", "0"), "--jobs"),
 ])
 def test_bad_batch_arguments(work, args, fragment):
+    (work / "one.csv").write_text("footage/day1/a.mp4,80,60,20\n")
+    (work / "bad.csv").write_text("footage/day1/a.mp4;80;60;20\n")
     result = invoke(*args)
     assert result.exit_code == 2
     assert result.stderr.startswith("lptrack: error:") and fragment in result.stderr

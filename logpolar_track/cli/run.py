@@ -204,7 +204,18 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
                  fps=fps, video_out=video_out, csv_out=csv_out, out_dir=out_dir, data_format=data_format,
                  no_video=no_video, overwrite=overwrite, skip_existing=skip_existing, quiet=quiet)
         return
-    many = "with --scheduler" if scheduler is not None and len(videos) == 1 else "with several videos"
+    # Inputs first: a malformed ROI file is the error to see, not what the outputs would have been.
+    entries = read_roi_file(roi_file) if roi_file is not None else []
+    if scheduler is not None and len(videos) == 1:
+        many = "with --scheduler"
+    elif roi_file is not None:
+        many = "with --roi-file"
+    elif "-" in videos:
+        many = "with '-' (paths on stdin)"
+    elif len(videos) == 1:
+        many = "with a folder"
+    else:
+        many = "with several videos"
     if video_out is not None:
         raise UsageError(f"--out names one video's output in this process; {many} give --out-dir DIR")
     if csv_out not in (None, "-"):
@@ -216,7 +227,6 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
         raise OutputError("cannot write the rows to stdout: it is closed")
     if stream and skip_existing:
         raise UsageError("--skip-existing needs outputs in files; it cannot apply to --csv -")
-    entries = read_roi_file(roi_file) if roi_file is not None else []
     if not videos and not entries:  # without VIDEO arguments the ROI file's videos are the inputs
         raise UsageError(f"no videos found in ROI file '{roi_file}': write one line per video, "
                          f"video,roi[,start_frame][,tracker]")

@@ -786,3 +786,12 @@ def test_a_roi_sidecar_saved_with_a_byte_order_mark_is_read(tiny_video, workdir)
     result = invoke(tiny_video.path, "--no-video", "--csv", "-", "--frames", "2")
     assert result.exit_code == 0, result.stderr
     assert read_rows(result.stdout)[0]["cx"] == "80.000"
+
+
+def test_a_video_written_under_another_name_is_said_under_quiet_too(tiny_video, workdir):
+    """mp4v takes no rate of 65536 fps or more: the annotated video falls back to MJPG in .avi, which a script
+    that named out.mp4 must hear of even with -q."""
+    result = invoke(tiny_video.path, "-o", "out.mp4", "--fps", "65536", "-q", "--frames", "2")
+    assert result.exit_code == 0
+    assert result.stderr == "lptrack: warning: could not write 'out.mp4'; wrote 'out.avi' (MJPG) instead\n"
+    assert Path("out.avi").is_file() and not Path("out.mp4").exists()

@@ -340,6 +340,10 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
         stdout_reader_left()
     if csv_out == "-" and _reader_left(sys.stdout):
         stdout_reader_left()  # `| head` left after the last rows went into the pipe: as if their write had failed
+    if summary.video_out is not None and video_out is not None and summary.video_out != Path(video_out):
+        # Said under --quiet too: a script looks for the file it named.
+        click.echo(f"lptrack: warning: could not write '{video_out}'; wrote '{summary.video_out}' "
+                   f"({summary.fourcc}) instead", err=True)
     if not show:
         return
     if roi is None and start_frame > 0 and any(p.is_file() for p in roi_sidecar_paths(video)):
@@ -351,9 +355,6 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
     if summary.truncated:
         click.echo(f"lptrack: warning: {_truncation(label, summary.frames, summary.expected_frames)}",
                    err=True)
-    if summary.video_out is not None and video_out is not None and summary.video_out != Path(video_out):
-        click.echo(f"lptrack: warning: could not write '{video_out}'; wrote '{summary.video_out}' "
-                   f"({summary.fourcc}) instead", err=True)
     outputs = []
     if summary.video_out is not None:
         outputs.append(f"video {summary.video_out} ({summary.fourcc}, {summary.video_fps:g} fps)")

@@ -528,3 +528,25 @@ def test_mil_refuses_a_box_it_would_hang_on():
     with pytest.raises(RoiError, match="cv-mil cannot start on a box under 5 px a side .the ROI's is 4x4 px."):
         create_tracker("cv-mil").init(frame, Ellipse.circle(80, 60, 2))
     create_tracker("cv-mil").init(frame, Ellipse.circle(80, 60, 3))  # 6 x 6 px: starts
+
+
+def test_the_contrib_hint_follows_the_installed_wheels(monkeypatch):
+    """Both OpenCV wheels installed (lptrack reinstalled after the swap): uninstalling only the plain one, as the
+    swap says, would leave cv2 broken; the hint says to reinstall the contrib one alone."""
+    import importlib.metadata
+
+    from logpolar_track.trackers import opencv
+
+    installed = {"opencv-python-headless": "5.1.0.95"}
+
+    def version(name):
+        if name not in installed:
+            raise importlib.metadata.PackageNotFoundError(name)
+        return installed[name]
+
+    monkeypatch.setattr(importlib.metadata, "version", version)
+    assert opencv._contrib_hint().startswith("needs opencv-contrib-python-headless instead of")
+    installed["opencv-contrib-python-headless"] = "5.1.0.95"
+    assert opencv._contrib_hint().startswith("both opencv-python-headless and opencv-contrib-python-headless are")
+    assert "pip uninstall -y opencv-python-headless opencv-contrib-python-headless && pip install" in \
+        opencv._contrib_hint()

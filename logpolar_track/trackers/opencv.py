@@ -37,6 +37,23 @@ from .base import Tracker, TrackState, check_frame, check_ranges, check_start, f
 
 _CONTRIB_HINT = ("needs opencv-contrib-python-headless instead of opencv-python-headless "
                  "(swap them: pip uninstall opencv-python-headless && pip install opencv-contrib-python-headless)")
+#: Where both wheels are installed (reinstalling lptrack after the swap brings the plain one back), they share
+#: the cv2 module, and whichever was installed last wins; uninstalling only the plain one leaves it broken.
+_BOTH_WHEELS_HINT = ("both opencv-python-headless and opencv-contrib-python-headless are installed and share the "
+                     "cv2 module; reinstall the contrib one alone: pip uninstall -y opencv-python-headless "
+                     "opencv-contrib-python-headless && pip install opencv-contrib-python-headless")
+
+
+def _contrib_hint() -> str:
+    """What to do for the contrib trackers, as the installed OpenCV wheels say."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        version("opencv-contrib-python-headless")
+        version("opencv-python-headless")
+    except PackageNotFoundError:
+        return _CONTRIB_HINT
+    return _BOTH_WHEELS_HINT
 
 
 class _OpenCVTracker(Tracker):
@@ -68,7 +85,7 @@ class _OpenCVTracker(Tracker):
     @classmethod
     def unavailable_reason(cls) -> str:
         """Why the tracker cannot be created here, in one line ('' when it can)."""
-        return "" if cls.available() else f"cv2.{cls._cv_class} is not in this OpenCV build; {_CONTRIB_HINT}"
+        return "" if cls.available() else f"cv2.{cls._cv_class} is not in this OpenCV build; {_contrib_hint()}"
 
     def _create(self):
         import cv2

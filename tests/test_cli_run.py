@@ -795,3 +795,10 @@ def test_a_video_written_under_another_name_is_said_under_quiet_too(tiny_video, 
     assert result.exit_code == 0
     assert result.stderr == "lptrack: warning: could not write 'out.mp4'; wrote 'out.avi' (MJPG) instead\n"
     assert Path("out.avi").is_file() and not Path("out.mp4").exists()
+
+
+def test_fps_takes_a_fraction_as_ffmpeg_does(tiny_video, workdir):
+    result = invoke(tiny_video.path, "--no-video", "--csv", "-", "--frames", "3", "--fps", "30000/1001")
+    assert result.exit_code == 0 and read_rows(result.stdout)[2]["time_s"] == "0.066733"
+    bad = invoke(tiny_video.path, "--no-video", "--csv", "-", "--fps", "30/0")
+    assert bad.exit_code == 2 and "'30/0' is not a frame rate; give frames per second as a number" in bad.stderr

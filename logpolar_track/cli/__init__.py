@@ -219,6 +219,24 @@ def parse_roi_option(spec: str) -> Ellipse:
         raise RoiError(message if ROI_SYNTAX in message else f"{message}; expected {ROI_SYNTAX}") from None
 
 
+class FrameRate(click.ParamType):
+    """A frame rate as a number or a fraction, as FFmpeg writes NTSC's: ``25``, ``29.97``, ``30000/1001``."""
+
+    name = "rate"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, (int, float)):
+            return float(value)
+        text = str(value).strip()
+        numerator, slash, denominator = text.partition("/")
+        try:
+            rate = float(numerator) / float(denominator) if slash else float(text)
+        except (ValueError, ZeroDivisionError):
+            self.fail(f"'{value}' is not a frame rate; give frames per second as a number (25, 29.97) or a "
+                      f"fraction (30000/1001)", param, ctx)
+        return rate
+
+
 def check_jobs_or_scheduler(jobs_given: bool, scheduler: str | None) -> None:
     """``--jobs`` and ``--scheduler`` contradict each other: the cluster's workers, not local processes, run the
     work (``run`` and ``bench`` take one or the other)."""

@@ -17,7 +17,7 @@ from ..look import (PLOT_SUFFIXES, ROUND_TOLERANCE, SHEET_ROWS, check_image_suff
                     find_video_for_csv, matplotlib_hint, plot_track, read_frame, read_run_csv, roi_from_box,
                     roi_from_points, write_contact_sheet, write_frame_png)
 from ..video import input_label
-from . import OneLineErrors, main, parse_roi_option, require_stdout, write_stdout
+from . import FrameRate, OneLineErrors, main, parse_roi_option, require_stdout, write_stdout
 
 
 def _run_stem(csv_path: Path) -> str:
@@ -45,7 +45,7 @@ Examples:
               help="Grid line spacing in pixels; 0 for no grid.")
 @click.option("--roi", "roi_spec", metavar="SPEC",
               help="Draw this candidate ROI: 'cx,cy,r' or 'cx,cy,a,b,angle' (pixels; degrees CCW).")
-@click.option("--fps", type=float, default=None, metavar="RATE",
+@click.option("--fps", type=FrameRate(), default=None, metavar="RATE",
               help="Frames per second for --time instead of the video's own, as 'lptrack run --fps' (an image "
                    "sequence has none: 25 is assumed).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing PNG.")

@@ -26,7 +26,7 @@ from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..trackers.base import did_you_mean
 from ..video import check_fps, guess_image_sequence, input_label, make_output_folder, remove_empty_folders
-from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, check_jobs_or_scheduler, main, parse_param_options,
+from . import (EXIT_FAILURE, PARAM_HELP, FrameRate, OneLineErrors, check_jobs_or_scheduler, main, parse_param_options,
                parse_roi_option, stdout_reader_left)
 
 
@@ -136,7 +136,7 @@ Examples:
               help="Frame index (0 = first) the ROI refers to; tracking starts there.")
 @click.option("--frames", "max_frames", type=click.IntRange(min=1), default=None, metavar="N",
               help="Track N frames (the start frame included), then stop. Default: to the end of the video.")
-@click.option("--fps", type=float, default=None, metavar="RATE",
+@click.option("--fps", type=FrameRate(), default=None, metavar="RATE",
               help="Frames per second of the input, for time_s and the annotated video, as FFmpeg's -framerate: "
                    "an image sequence's (it has none: 25 is assumed), or instead of a video's own.")
 @click.option("--out", "-o", "video_out", type=click.Path(dir_okay=False, path_type=Path), metavar="VIDEO_OUT",

@@ -229,6 +229,30 @@ def parse_roi(spec: str) -> Ellipse:
     return Ellipse(cx, cy, a, b, wrap_degrees(angle))
 
 
+def as_ellipse(roi) -> Ellipse:
+    """A ROI as the Python API takes it: an :class:`Ellipse`, a ``--roi`` string (:func:`parse_roi`), or its 3 or
+    5 numbers in a sequence (``(cx, cy, r)``, ``(cx, cy, a, b, angle)``: pixels, degrees counter-clockwise).
+
+    Raises
+    ------
+    RoiError
+        Anything else, with what is accepted; 4 numbers (an OpenCV box) are pointed to :func:`ellipse_in_box`.
+    """
+    if isinstance(roi, Ellipse):
+        return roi
+    if isinstance(roi, str):
+        return parse_roi(roi)
+    try:
+        values = [float(v) for v in np.asarray(roi, dtype=np.float64).reshape(-1)]
+    except (TypeError, ValueError):
+        raise RoiError(f"a ROI is an Ellipse, a string {ROI_SYNTAX}, or those 3 or 5 numbers; got "
+                       f"{type(roi).__name__} {roi!r:.60}") from None
+    if len(values) == 4:
+        raise RoiError(f"a ROI of 4 numbers {tuple(values)} looks like an OpenCV box (x, y, w, h); lptrack takes a "
+                       f"circle or an ellipse: logpolar_track.geometry.ellipse_in_box(x, y, w, h) is the one inside it")
+    return parse_roi(",".join(repr(v) for v in values))
+
+
 def check_roi_fits(roi: Ellipse, width: int, height: int, *, source: str | None = None,
                    min_inside: float = 0.5, min_radius: float = 2.0) -> None:
     """Raise :class:`RoiError` unless ``roi`` is usable on a ``width`` x ``height`` frame.

@@ -11,14 +11,14 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Iterator, Union
+from typing import Callable, Iterator, Sequence, Union
 
 import numpy as np
 
 from .draw import draw_state
 from .errors import LptrackError, OutputError, RoiError, UsageError
 from .executor import TRACKING_OPENCV_THREADS, opencv_threads
-from .geometry import ROI_SYNTAX, Ellipse, check_roi_fits, parse_roi
+from .geometry import ROI_SYNTAX, Ellipse, as_ellipse, check_roi_fits, parse_roi
 from . import trackers as _trackers
 from .results import CsvWriter, FrameResult
 from .trackers import Tracker, create_tracker
@@ -33,7 +33,7 @@ DEFAULT_TRACKER: str = getattr(_trackers, "DEFAULT_TRACKER", "fixed")
 VIDEO_OUT_SUFFIX = ".lptrack.mp4"
 CSV_OUT_SUFFIX = ".lptrack.csv"
 
-RoiLike = Union[Ellipse, str, None]
+RoiLike = Union[Ellipse, str, Sequence[float], None]
 ProgressLike = Union[bool, Callable[[int, "int | None"], None], None]
 
 
@@ -96,10 +96,8 @@ def read_roi_sidecar(video_path) -> Ellipse | None:
 
 
 def _resolve_roi(roi: RoiLike, video_path) -> Ellipse:
-    if isinstance(roi, Ellipse):
-        return roi
     if roi is not None:
-        return parse_roi(roi)
+        return as_ellipse(roi)
     found = read_roi_sidecar(video_path)
     if found is None:
         names = " or ".join(f"'{p.name}'" for p in roi_sidecar_paths(video_path))
@@ -140,10 +138,11 @@ def track_video(path, roi: RoiLike = None, tracker: str | Tracker = DEFAULT_TRAC
     ----------
     path : str or Path
         Video file.
-    roi : Ellipse or str, optional
-        The object on the start frame: an :class:`Ellipse`, or text ``cx,cy,r`` / ``cx,cy,a,b,angle``
-        (pixels; angle in degrees counter-clockwise on screen). If None, read from the video's ``.roi``
-        sidecar (:func:`read_roi_sidecar`).
+    roi : Ellipse, str or sequence of float, optional
+        The object on the start frame: an :class:`Ellipse`, text ``cx,cy,r`` / ``cx,cy,a,b,angle`` (pixels;
+        angle in degrees counter-clockwise on screen), or those 3 or 5 numbers
+        (:func:`~logpolar_track.geometry.as_ellipse`). If None, read from the video's ``.roi`` sidecar
+        (:func:`read_roi_sidecar`).
     tracker : str or Tracker
         A registered tracker name (:func:`~logpolar_track.trackers.tracker_names`) or a Tracker instance.
     start_frame : int

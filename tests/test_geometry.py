@@ -2,6 +2,7 @@
 (pixels, y down, angles counter-clockwise on screen)."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -179,3 +180,26 @@ def test_rotate_screen_turns_counter_clockwise_on_screen():
     assert rotate_screen((1.0, 0.0), 90.0) == pytest.approx([0.0, -1.0])
     many = rotate_screen(np.array([[1.0, 0.0], [0.0, 2.0]]), 90.0)
     assert many.shape == (2, 2) and many == pytest.approx(np.array([[0.0, -1.0], [2.0, 0.0]]))
+
+
+@pytest.mark.parametrize("roi", ["30,40,10", (30, 40, 10), [30.0, 40.0, 10.0], np.array([30, 40, 10]),
+                                 Ellipse.circle(30, 40, 10)])
+def test_as_ellipse_takes_what_a_python_user_passes(roi):
+    from logpolar_track.geometry import as_ellipse
+
+    assert as_ellipse(roi) == Ellipse.circle(30, 40, 10)
+    assert as_ellipse((30, 40, 10, 5, 400)) == Ellipse(30, 40, 10, 5, 40)
+
+
+@pytest.mark.parametrize("roi, fragment", [
+    ((10, 20, 30, 40), "looks like an OpenCV box (x, y, w, h); lptrack takes a circle or an ellipse: "
+                       "logpolar_track.geometry.ellipse_in_box(x, y, w, h)"),
+    ((1, 2), "has 2 numbers; expected"),
+    (object(), "a ROI is an Ellipse, a string"),
+    ({"cx": 1}, "a ROI is an Ellipse, a string"),
+])
+def test_as_ellipse_says_what_is_accepted(roi, fragment):
+    from logpolar_track.geometry import as_ellipse
+
+    with pytest.raises(RoiError, match=re.escape(fragment)):
+        as_ellipse(roi)

@@ -550,3 +550,15 @@ def test_the_contrib_hint_follows_the_installed_wheels(monkeypatch):
     assert opencv._contrib_hint().startswith("both opencv-python-headless and opencv-contrib-python-headless are")
     assert "pip uninstall -y opencv-python-headless opencv-contrib-python-headless && pip install" in \
         opencv._contrib_hint()
+
+
+@pytest.mark.parametrize("name", ["lpcf", "fixed", "cv-mil"])
+def test_init_takes_a_roi_string_or_numbers(name):
+    """As track_video does: init(frame, '80,60,20') or (80, 60, 20) raised AttributeError ('str' has no 'cx');
+    an OpenCV-style box is pointed to ellipse_in_box."""
+    frame = random_texture(120, 160, np.random.default_rng(0))
+    for roi in ("80,60,20", (80, 60, 20)):
+        state = create_tracker(name).init(frame, roi)
+        assert state.ellipse == Ellipse.circle(80, 60, 20)
+    with pytest.raises(RoiError, match="looks like an OpenCV box"):
+        create_tracker(name).init(frame, (60, 40, 40, 40))

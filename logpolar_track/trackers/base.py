@@ -17,7 +17,7 @@ from typing import Callable, ClassVar, Iterable
 import numpy as np
 
 from ..errors import LptrackError, UsageError
-from ..geometry import Ellipse, check_roi_fits, wrap_degrees
+from ..geometry import Ellipse, as_ellipse, check_roi_fits, wrap_degrees
 from ..logpolar import to_gray
 
 
@@ -60,7 +60,10 @@ class Tracker(ABC):
 
     @abstractmethod
     def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
-        """Start tracking the object inside ``roi`` on ``frame``; returns the initial state (score 1)."""
+        """Start tracking the object inside ``roi`` on ``frame``; returns the initial state (score 1).
+
+        ``roi`` is an :class:`~logpolar_track.geometry.Ellipse`, or a ``--roi`` string or its 3 or 5 numbers
+        (:func:`~logpolar_track.geometry.as_ellipse`): pixels, degrees counter-clockwise on screen."""
 
     @abstractmethod
     def update(self, frame: np.ndarray) -> tuple[bool, TrackState]:
@@ -99,7 +102,7 @@ class SimilarityTracker(Tracker):
 
     def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
         frame = np.asarray(frame)
-        check_start(frame, roi)
+        roi = check_start(frame, roi)
         if abs(roi.angle_deg) > 360.0:
             # The same ellipse, its angle within a turn: a huge one (1e300, through the API) left no precision for
             # the turns tracked (4041 degrees reported for 39.5).
@@ -205,8 +208,9 @@ def _layout_name(channels: int, dtype) -> str:
     return f"{_CHANNEL_NAMES[channels]} {np.dtype(dtype).name}"
 
 
-def check_start(frame: np.ndarray, roi: Ellipse) -> None:
-    """Raise unless ``frame`` is an image (:func:`check_frame`) and ``roi`` fits it
+def check_start(frame: np.ndarray, roi) -> Ellipse:
+    """``roi`` as an :class:`Ellipse` (:func:`~logpolar_track.geometry.as_ellipse`: also a ``--roi`` string or its
+    numbers), once ``frame`` is known to be an image (:func:`check_frame`) and the ROI to fit it
     (:func:`~logpolar_track.geometry.check_roi_fits`): what every tracker's ``init`` needs.
 
     Raises
@@ -214,12 +218,14 @@ def check_start(frame: np.ndarray, roi: Ellipse) -> None:
     UsageError
         The frame is not an image.
     RoiError
-        The ROI is too small or does not fit the frame (an :class:`Ellipse` is finite, with semi-axes > 0, by
-        construction).
+        The ROI is not one, is too small or does not fit the frame (an :class:`Ellipse` is finite, with
+        semi-axes > 0, by construction).
     """
     frame = np.asarray(frame)
     check_frame(frame)
+    roi = as_ellipse(roi)
     check_roi_fits(roi, frame.shape[1], frame.shape[0])
+    return roi
 
 
 def _finite(sim: Similarity) -> bool:

@@ -94,7 +94,7 @@ class _OpenCVTracker(Tracker):
 
     def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
         frame = np.asarray(frame)
-        check_start(frame, roi)
+        roi = check_start(frame, roi)
         x, y, w, h = roi.bounding_box()
         # OpenCV takes an integer box; round the corners so the box stays centred on the ROI. A ROI may hang
         # over the frame's edge (half of it inside is enough): the box is cut to the frame, which MIL needs (a box

@@ -412,8 +412,10 @@ def test_a_parameter_only_a_skipped_tracker_takes_is_named_as_such():
 
 
 def test_create_tracker_reports_any_bad_keyword_as_a_usage_error():
-    with pytest.raises(UsageError, match="bad parameters for tracker 'lpcf': .*unexpected keyword"):
+    with pytest.raises(UsageError, match="tracker 'lpcf' has no parameter 'nosuch'; it takes: padding, "):
         create_tracker("lpcf", nosuch=1)
+    with pytest.raises(UsageError, match=r"has no parameter 'learnig_rate' \(did you mean 'learning_rate'\?\)"):
+        create_tracker("lpcf", learnig_rate=0.1)  # as the CLI's --param says it
     with pytest.raises(UsageError, match="bad parameters for tracker 'fixed'"):
         create_tracker("fixed", window=float("inf"))  # int(inf): OverflowError in the constructor
     with pytest.raises(UsageError, match="bad parameters for tracker 'lpcf'"):

@@ -306,6 +306,12 @@ def create_tracker(name: str, **params) -> Tracker:
     cls = tracker_class(name)
     if not getattr(cls, "available", lambda: True)():
         raise UsageError(f"tracker '{name}' is not available here: {cls.unavailable_reason()}")
+    taken = tracker_parameters(name)
+    unknown = [key for key in params if key not in taken]
+    if unknown:
+        key = unknown[0]
+        raise UsageError(f"tracker '{name}' has no parameter '{key}'{did_you_mean(key, taken)}; it takes: "
+                         f"{', '.join(taken) or 'none'}")
     try:
         return cls(**params)
     except LptrackError:

@@ -73,13 +73,9 @@ def resolve_trackers(spec: str | None) -> tuple[list[str], list[tuple[str, str]]
         if not names:
             raise UsageError("--trackers is empty; give comma-separated names from: "
                              + ", ".join(tracker_names(include_unavailable=True)))
-    known = tracker_names(include_unavailable=True)
-    for name in names:
-        if name not in known:
-            raise UsageError(f"unknown tracker '{name}'; choose from: {', '.join(known)}")
+    classes = [tracker_class(name) for name in names]  # an unknown name: UsageError, with "did you mean"
     available, skipped = [], []
-    for name in names:
-        cls = tracker_class(name)
+    for name, cls in zip(names, classes):
         if getattr(cls, "available", lambda: True)():
             available.append(name)
         else:

@@ -281,6 +281,8 @@ def test_unknown_tracker_is_a_usage_error(dataset):
     res = _run("bench", "--dataset", dataset, "--trackers", "fixed,nosuch")
     assert res.exit_code == 2 and "unknown tracker 'nosuch'" in res.stderr
     assert res.stdout == ""
+    near = _run("bench", "--dataset", dataset, "--trackers", "lpcf,kcf")
+    assert near.exit_code == 2 and "unknown tracker 'kcf' (did you mean 'cv-kcf'?)" in near.stderr
 
 
 @pytest.mark.skipif(KCFTracker.available(), reason="opencv-contrib is installed: KCF/CSRT are available")

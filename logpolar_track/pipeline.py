@@ -100,9 +100,10 @@ def _resolve_roi(roi: RoiLike, video_path) -> Ellipse:
         return as_ellipse(roi)
     found = read_roi_sidecar(video_path)
     if found is None:
-        names = " or ".join(f"'{p.name}'" for p in roi_sidecar_paths(video_path))
+        # Paths, not names: an image sequence's sidecar is in its images' folder, named after the pattern.
+        names = " or ".join(f"'{p}'" for p in roi_sidecar_paths(video_path))
         raise UsageError(f"no ROI given for '{video_path}': give --roi {ROI_SYNTAX}, or put one such line "
-                         f"in {names} next to the video")
+                         f"in {names}")
     return found
 
 

@@ -106,7 +106,8 @@ class VideoOutcome:
     counts tracked frames; ``expected_frames`` is what the container announced, and ``truncated`` says that
     fewer came (:attr:`RunSummary.truncated <logpolar_track.pipeline.RunSummary.truncated>`). ``fps_assumed``
     is the frame rate assumed for a source that reports none (an image sequence, when no ``fps`` was given), else
-    None.
+    None. ``timestamps_from`` is, for a variable frame rate, ``(first frame timed by its timestamp, fps)``
+    (:attr:`RunSummary.timestamps_from <logpolar_track.pipeline.RunSummary.timestamps_from>`), else None.
     """
 
     label: str
@@ -119,6 +120,7 @@ class VideoOutcome:
     truncated: bool = False
     rows: str | None = None
     fps_assumed: float | None = None
+    timestamps_from: tuple[int, float] | None = None
 
 
 @dataclass
@@ -570,7 +572,9 @@ def run_job(job: VideoJob, report: Callable[[int], None] | None = None) -> Video
     return VideoOutcome(job.label, "ok", frames=summary.frames, lost=summary.lost,
                         expected_frames=summary.expected_frames, seconds=summary.seconds,
                         truncated=summary.truncated, rows=None if buffer is None else buffer.getvalue(),
-                        fps_assumed=summary.video_fps if summary.video_fps_guessed else None)
+                        fps_assumed=summary.video_fps if summary.video_fps_guessed else None,
+                        timestamps_from=(None if summary.timestamps_from is None
+                                         else (summary.timestamps_from, summary.video_fps)))
 
 
 def remove_temporary_outputs(job: VideoJob, pid: int) -> None:

@@ -209,6 +209,9 @@ class RunSummary:
     expected_frames : int
         Frames from the start frame to the end (or ``max_frames`` if fewer) as the container announces them
         (0 when it does not say). Fewer ``frames`` than this means the video ended early (truncated file).
+    timestamps_from : int or None
+        A variable frame rate: the first frame whose ``time_s`` is the stream's timestamp rather than ``frame /
+        fps`` (:meth:`~logpolar_track.video.VideoReader.time_of`); None for a constant one.
     """
 
     video: Path
@@ -226,6 +229,7 @@ class RunSummary:
     fourcc: str | None
     csv_out: str | None
     expected_frames: int = 0
+    timestamps_from: int | None = None
 
     @property
     def truncated(self) -> bool:
@@ -393,4 +397,5 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
         processing_fps=frames / seconds if seconds > 0 else float("inf"), seconds=seconds,
         video_fps=reader.fps, video_fps_guessed=reader.fps_guessed, width=reader.width, height=reader.height,
         video_out=written, fourcc=video_writer.fourcc if video_writer is not None else None,
-        csv_out=None if csv_writer is None else csv_writer.target, expected_frames=announced)
+        csv_out=None if csv_writer is None else csv_writer.target, expected_frames=announced,
+        timestamps_from=reader.timestamps_from)

@@ -301,6 +301,9 @@ class VideoReader:
         Frames per second as given, or as the container reports it, never rounded; :data:`FALLBACK_FPS` if it
         reports 0 or NaN (then ``fps_guessed`` is True).
     fps_guessed : bool
+    timestamps_from : int or None
+        The first frame whose time (``time_s``) is the stream's own timestamp, once iteration has reached it; None
+        while every frame is within half a frame of ``index / fps`` (constant frame rate). See :meth:`time_of`.
     frame_count : int
         Frame count the container reports; may be approximate, and 0 when unknown.
     width, height : int
@@ -332,10 +335,16 @@ class VideoReader:
         if _fourcc(self._cap) == "ansi":  # FFmpeg renders any text file as a video of its characters
             self._cap.release()
             raise VideoError(f"cannot read '{self.path}' as a video: it is a text file")
+        # The stream's timestamps are read only where its own rate is used: --fps overrides them, and an image
+        # sequence or a container that reports no rate has none worth reading.
+        self._stamped = fps is None and not is_image_sequence(self.path)
         if fps is None:
             fps = float(self._cap.get(cv2.CAP_PROP_FPS) or 0.0)
         self.fps_guessed = not (math.isfinite(fps) and fps > 0)
         self.fps = FALLBACK_FPS if self.fps_guessed else float(fps)
+        self._stamped = self._stamped and not self.fps_guessed
+        self.timestamps_from: int | None = None
+        self._last_time = -math.inf
         count = self._cap.get(cv2.CAP_PROP_FRAME_COUNT)
         self.frame_count = int(count) if math.isfinite(count) and count > 0 else 0
         # Skip to the start frame by decoding: exact, unlike CAP_PROP_POS_FRAMES on inter-coded streams.
@@ -346,6 +355,7 @@ class VideoReader:
                     raise VideoError(f"video '{self.path}' contains no frames")
                 raise _past_the_end(self.start_frame, self.path, skipped)
         ok, first = self._cap.read()
+        self._first_stamp = self._stamp()
         if not ok or first is None or first.size == 0:
             self._cap.release()
             if self.start_frame == 0:
@@ -374,9 +384,27 @@ class VideoReader:
                 f"frame_count={self.frame_count}, start_frame={self.start_frame})")
 
     # -- reading ---------------------------------------------------------------------------------------
-    def time_of(self, index: int) -> float:
-        """Nominal time in seconds of frame ``index`` (``index / fps``)."""
-        return index / self.fps
+    def time_of(self, index: int, stamp: float | None = None) -> float:
+        """Time in seconds of frame ``index``: ``index / fps``, or the frame's timestamp ``stamp`` (seconds from
+        the stream's start) from the first frame whose timestamp lies more than half a frame from that on
+        (:attr:`timestamps_from`): a variable frame rate, as phones record in low light, where ``index / fps``
+        (the average rate) drifts by seconds. A constant rate's timestamps, which some containers round to
+        milliseconds, never leave ``index / fps``. Times stay increasing whatever a stream's timestamps do."""
+        nominal = index / self.fps
+        usable = stamp is not None and math.isfinite(stamp) and stamp > self._last_time
+        if (self.timestamps_from is None and usable and self._stamped
+                and abs(stamp - nominal) > 0.5 / self.fps):
+            self.timestamps_from = index
+        if self.timestamps_from is None:
+            time_s = nominal
+        else:
+            time_s = stamp if usable else self._last_time + 1.0 / self.fps
+        self._last_time = time_s
+        return time_s
+
+    def _stamp(self) -> float | None:
+        """The last decoded frame's timestamp in seconds, if the stream's timestamps are read."""
+        return self._cap.get(cv2.CAP_PROP_POS_MSEC) / 1000.0 if self._stamped else None
 
     def __iter__(self) -> Iterator[tuple[int, float, np.ndarray]]:
         if self._iterated:
@@ -389,7 +417,7 @@ class VideoReader:
     def _frames(self) -> Iterator[tuple[int, float, np.ndarray]]:
         index = self.start_frame
         first, self.first_frame = self.first_frame, None  # do not keep a frame alive for the whole run
-        yield index, self.time_of(index), first
+        yield index, self.time_of(index, self._first_stamp), first
         del first  # nor here, where the generator would hold it to the end
         if self._closed:
             return
@@ -404,7 +432,9 @@ class VideoReader:
             if isinstance(item, BaseException):
                 raise VideoError(f"reading '{self.path}' failed after frame {index}: {item}") from item
             index += 1
-            yield index, self.time_of(index), item
+            frame, stamp = item
+            del item
+            yield index, self.time_of(index, stamp), frame
 
     def _decode(self) -> None:
         """Background thread: decode frames into the bounded queue until the end or :meth:`close`.
@@ -416,7 +446,7 @@ class VideoReader:
                 ok, frame = self._cap.read()  # releases the GIL while FFmpeg decodes
                 if not ok or frame is None:
                     break
-                self._queue.put(frame)
+                self._queue.put((frame, self._stamp()))
                 del frame  # the queue holds it; the consumer's taking it frees the slot
             else:  # stopped by close(): nobody waits for the end
                 return

@@ -101,6 +101,9 @@ def test_reader_decodes_at_most_read_ahead_frames_ahead_and_keeps_none(tiny_vide
             decoded.append(ok)
             return ok, frame
 
+        def get(self, prop):
+            return capture.get(prop)
+
         def release(self):
             capture.release()
 
@@ -595,3 +598,18 @@ def test_a_folder_of_images_suggests_its_pattern(tmp_path):
     (tmp_path / "plain").mkdir()
     (tmp_path / "plain" / "logo.png").write_bytes(b"x")
     assert video_module.guess_image_sequence(tmp_path / "plain") is None
+
+
+def test_times_follow_the_streams_timestamps_once_the_rate_varies(tiny_video):
+    """A constant rate's timestamps (some containers round them to milliseconds) keep ``index / fps``; from the
+    first frame whose timestamp lies more than half a frame from it (a phone slowing to 15 fps in low light),
+    ``time_s`` is the timestamp, and stays increasing whatever the stream says."""
+    with VideoReader(tiny_video.path) as reader:  # 30 fps
+        assert [reader.time_of(i, round(i / 30, 3)) for i in range(3)] == [0.0, 1 / 30, 2 / 30]
+        assert reader.timestamps_from is None
+        assert reader.time_of(3, 0.1 + 0.4 / 30) == 0.1  # 0.4 of a frame late: still the nominal time
+        assert reader.time_of(4, 0.2) == 0.2 and reader.timestamps_from == 4  # 2 frames late: the timestamp
+        assert reader.time_of(5, 0.21) == 0.21  # from then on, the timestamps
+        assert reader.time_of(6, 0.1) == pytest.approx(0.21 + 1 / 30)  # going back: a frame on instead
+    with VideoReader(tiny_video.path, fps=30) as reader:  # --fps: the rate given, whatever the timestamps
+        assert reader.time_of(4, 0.2) == 4 / 30 and reader.timestamps_from is None

@@ -355,6 +355,9 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
     if summary.truncated:
         click.echo(f"lptrack: warning: {_truncation(label, summary.frames, summary.expected_frames)}",
                    err=True)
+    if summary.timestamps_from is not None:
+        varying = _varying_rate(label, summary.timestamps_from, summary.video_fps, summary.video_out is not None)
+        click.echo(f"lptrack: note: {varying}", err=True)
     outputs = []
     if summary.video_out is not None:
         outputs.append(f"video {summary.video_out} ({summary.fourcc}, {summary.video_fps:g} fps)")
@@ -369,6 +372,12 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
 def _rate_assumed(label: str, fps: float, video: bool) -> str:
     uses = "time_s and the output video" if video else "time_s"
     return f"'{label}' reports no frame rate; assumed {fps:g} fps for {uses} (give --fps to set it)"
+
+
+def _varying_rate(label: str, first: int, fps: float, video: bool) -> str:
+    played = f"; the annotated video plays at a constant {fps:g} fps" if video else ""
+    return (f"{label}'s frame rate varies: time_s follows its timestamps from frame {first} on (before, frame / "
+            f"{fps:g} fps was within half a frame of them){played}")
 
 
 def _truncation(label: str, frames: int, expected: int) -> str:
@@ -445,6 +454,9 @@ def _report(summary: BatchSummary, *, quiet: bool, video: bool) -> None:
                 click.echo(f"lptrack: warning: {_rate_assumed(outcome.label, outcome.fps_assumed, video)}", err=True)
             if outcome.truncated:
                 click.echo(f"lptrack: warning: {_truncation(outcome.label, outcome.frames, outcome.expected_frames)}",
+                           err=True)
+            if outcome.timestamps_from is not None:
+                click.echo(f"lptrack: note: {_varying_rate(outcome.label, *outcome.timestamps_from, video)}",
                            err=True)
     for outcome in summary.failed:
         click.echo(f"lptrack: failed: {outcome.label}: {outcome.reason}", err=True)

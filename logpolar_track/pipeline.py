@@ -311,7 +311,8 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
     path, roi, tracker, start_frame, max_frames, tracker_params, fps
         As in :func:`track_video`; ``fps`` is also the annotated video's rate.
     video_out : str or Path, optional
-        Annotated video to write (same size, frame count and frame rate as the input); None for none.
+        Annotated video to write (same size, an odd one padded to even, frame count and frame rate as the
+        input); None for none.
     csv_out : str or Path, optional
         CSV to write (:data:`~logpolar_track.results.COLUMNS`); ``'-'`` for stdout; None for none.
     overwrite : bool

@@ -714,12 +714,19 @@ class VideoWriter:
                           f"(tried {', '.join(tried)})")
 
     def write(self, frame: np.ndarray) -> None:
-        """Append one BGR uint8 frame; the first frame fixes the video's size."""
+        """Append one BGR uint8 frame; the first frame fixes the video's size. An odd width or height is
+        padded by one column or row (its last one repeated) to the even size the codecs need."""
         if self._closed:
             raise RuntimeError("VideoWriter is closed")
         if frame.ndim == 2:
             frame = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
         height, width = frame.shape[:2]
+        if height % 2 or width % 2:
+            # The codecs store colour at half resolution (4:2:0) and OpenCV dropped an odd last row and column
+            # (641x479 became 640x478); padded instead, as FFmpeg users do (pad=ceil(iw/2)*2:ceil(ih/2)*2), every
+            # pixel stays where it was.
+            frame = cv2.copyMakeBorder(frame, 0, height % 2, 0, width % 2, cv2.BORDER_REPLICATE)
+            height, width = frame.shape[:2]
         if self._writer is None:
             self._open(width, height)
         elif (width, height) != self.size:

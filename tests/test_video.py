@@ -613,3 +613,21 @@ def test_times_follow_the_streams_timestamps_once_the_rate_varies(tiny_video):
         assert reader.time_of(6, 0.1) == pytest.approx(0.21 + 1 / 30)  # going back: a frame on instead
     with VideoReader(tiny_video.path, fps=30) as reader:  # --fps: the rate given, whatever the timestamps
         assert reader.time_of(4, 0.2) == 4 / 30 and reader.timestamps_from is None
+
+
+@pytest.mark.parametrize("name", ["odd.mp4", "odd.avi"])
+def test_an_odd_frame_size_is_padded_not_cut(tmp_path, name):
+    """4:2:0 codecs need even sizes: OpenCV wrote 641 x 479 frames as 640 x 478, dropping the last column and
+    row; they are padded to 642 x 480 instead, every pixel where it was."""
+    rng = np.random.default_rng(0)
+    frames = [rng.integers(0, 255, (479, 641, 3), dtype=np.uint8) for _ in range(3)]
+    frames[0][:, -1] = 255  # the last column, which the cut lost
+    with VideoWriter(tmp_path / name, 25.0) as writer:
+        for frame in frames:
+            writer.write(frame)
+    assert writer.size == (642, 480)
+    capture = cv2.VideoCapture(str(tmp_path / name))
+    ok, first = capture.read()
+    capture.release()
+    assert ok and first.shape == (480, 642, 3)
+    assert first[:479, 640].mean() > 200  # the last column kept (white, up to compression)

@@ -323,7 +323,7 @@ class VideoReader:
     def __init__(self, path, *, start_frame: int = 0, read_ahead: int = 1, fps: float | None = None):
         self.path = Path(path)
         if start_frame < 0:
-            raise VideoError(f"start frame must be >= 0, got {start_frame}")
+            raise UsageError(f"start frame must be >= 0, got {start_frame}")
         check_fps(fps)
         self.start_frame = int(start_frame)
         self._read_ahead = max(1, int(read_ahead))

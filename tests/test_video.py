@@ -631,3 +631,10 @@ def test_an_odd_frame_size_is_padded_not_cut(tmp_path, name):
     capture.release()
     assert ok and first.shape == (480, 642, 3)
     assert first[:479, 640].mean() > 200  # the last column kept (white, up to compression)
+
+
+def test_a_negative_start_frame_is_bad_usage(tiny_video):
+    from logpolar_track.errors import UsageError
+
+    with pytest.raises(UsageError, match="start frame must be >= 0, got -1"):
+        VideoReader(tiny_video.path, start_frame=-1)

@@ -170,6 +170,10 @@ def test_data_format_follows_the_csv_extension_unless_given(tiny_video, workdir)
     against = invoke(tiny_video.path, "--no-video", "--csv", "v.csv", "--format", "jsonl")
     assert against.exit_code == 0 and json.loads(Path("v.csv").read_text().splitlines()[0])["frame"] == 0
     assert "note: writing JSON lines to 'v.csv' (--format jsonl), whose name says CSV" in against.stderr
+    # A name another reader takes for another format (pandas decompresses .gz by the name).
+    gz = invoke(tiny_video.path, "--no-video", "--csv", "w.csv.gz")
+    assert gz.exit_code == 0 and Path("w.csv.gz").read_text().splitlines()[0] == HEADER
+    assert "note: writing CSV to 'w.csv.gz', whose name says gzip; lptrack writes CSV or JSON lines" in gz.stderr
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/null"), reason="needs /dev/null")

@@ -61,6 +61,10 @@ class TrackerChoice(click.Choice):
 
 #: What each of FORMATS is called in messages.
 _FORMAT_NAMES = {"csv": "CSV", "jsonl": "JSON lines"}
+#: Data-file extensions of formats lptrack does not write, and what readers take them for.
+_OTHER_DATA_SUFFIXES = {".json": "one JSON document", ".tsv": "tab-separated values", ".gz": "gzip",
+                        ".bz2": "bzip2", ".xz": "xz", ".zst": "zstd", ".zip": "zip", ".parquet": "Parquet",
+                        ".xlsx": "Excel"}
 
 
 def _tracker_lines() -> str:
@@ -185,6 +189,11 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
         # As ffmpeg's -f, --format wins over the name; but a name that says otherwise misleads whoever opens it.
         click.echo(f"lptrack: note: writing {_FORMAT_NAMES[data_format]} to '{csv_out}' (--format {data_format}), "
                    f"whose name says {_FORMAT_NAMES[next(k for k, v in FORMATS.items() if v == suffix)]}", err=True)
+    if suffix in _OTHER_DATA_SUFFIXES and not quiet:
+        # pandas.read_csv('t.csv.gz') decompresses by the name, and fails on plain text.
+        click.echo(f"lptrack: note: writing {_FORMAT_NAMES[data_format]} to '{csv_out}', whose name says "
+                   f"{_OTHER_DATA_SUFFIXES[suffix]}; lptrack writes CSV or JSON lines (--format jsonl), "
+                   f"uncompressed", err=True)
     if no_video and video_out is not None:
         raise UsageError("--out and --no-video contradict each other; give one of them")
     if overwrite and skip_existing:

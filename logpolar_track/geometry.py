@@ -174,6 +174,10 @@ def _invalid_message(e: Ellipse) -> str:
 
 
 def _fmt(value: float) -> str:
+    """A number for messages: up to 3 decimals, trailing zeros dropped; huge ones in exponent form (1e+308, not
+    309 digits)."""
+    if abs(value) >= 1e15:
+        return f"{value:.6g}"
     return f"{value:.3f}".rstrip("0").rstrip(".")
 
 

@@ -203,3 +203,8 @@ def test_as_ellipse_says_what_is_accepted(roi, fragment):
 
     with pytest.raises(RoiError, match=re.escape(fragment)):
         as_ellipse(roi)
+
+
+def test_a_huge_number_is_said_in_exponent_form():
+    with pytest.raises(RoiError, match=r"^ROI 300,250,1e\+308 lies mostly outside"):
+        check_roi_fits(Ellipse.circle(300, 250, 1e308), 640, 480)

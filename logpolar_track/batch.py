@@ -108,6 +108,7 @@ class VideoOutcome:
     is the frame rate assumed for a source that reports none (an image sequence, when no ``fps`` was given), else
     None. ``timestamps_from`` is, for a variable frame rate, ``(first frame timed by its timestamp, fps)``
     (:attr:`RunSummary.timestamps_from <logpolar_track.pipeline.RunSummary.timestamps_from>`), else None.
+    ``roi_flat``: the ROI held a flat region on the start frame (:attr:`RunSummary.roi_flat`).
     """
 
     label: str
@@ -121,6 +122,7 @@ class VideoOutcome:
     rows: str | None = None
     fps_assumed: float | None = None
     timestamps_from: tuple[int, float] | None = None
+    roi_flat: bool = False
 
 
 @dataclass
@@ -574,7 +576,8 @@ def run_job(job: VideoJob, report: Callable[[int], None] | None = None) -> Video
                         truncated=summary.truncated, rows=None if buffer is None else buffer.getvalue(),
                         fps_assumed=summary.video_fps if summary.video_fps_guessed else None,
                         timestamps_from=(None if summary.timestamps_from is None
-                                         else (summary.timestamps_from, summary.video_fps)))
+                                         else (summary.timestamps_from, summary.video_fps)),
+                        roi_flat=summary.roi_flat)
 
 
 def remove_temporary_outputs(job: VideoJob, pid: int) -> None:

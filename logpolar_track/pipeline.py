@@ -7,6 +7,7 @@ CSV atomically, and returns a :class:`RunSummary`.
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 from dataclasses import dataclass
@@ -20,6 +21,7 @@ from .errors import LptrackError, OutputError, RoiError, UsageError
 from .executor import TRACKING_OPENCV_THREADS, opencv_threads
 from .geometry import ROI_SYNTAX, Ellipse, as_ellipse, check_roi_fits, parse_roi
 from . import trackers as _trackers
+from .logpolar import within_0_255
 from .results import CsvWriter, FrameResult
 from .trackers import Tracker, create_tracker
 from .video import (CODECS_BY_EXTENSION, VideoReader, VideoWriter, check_output_path, frames_to_track,
@@ -105,6 +107,29 @@ def _resolve_roi(roi: RoiLike, video_path) -> Ellipse:
         raise UsageError(f"no ROI given for '{video_path}': give --roi {ROI_SYNTAX}, or put one such line "
                          f"in {names}")
     return found
+
+
+#: Levels (standard deviation, see roi_spread) under which a ROI on its start frame holds nothing to follow, measured over
+#: the ROI enlarged FLAT_ROI_EXTENT times: a plain ball is flat inside, and its outline is what trackers follow.
+FLAT_ROI_SPREAD, FLAT_ROI_EXTENT = 1.0, 1.5
+
+
+def roi_spread(frame: np.ndarray, roi: Ellipse) -> float:
+    """Standard deviation in levels (0 to 255) of ``frame`` inside ``roi``'s ellipse, the largest of its colour
+    channels' (a red ball on green felt is one grey): about 0 for a flat region (a letterbox bar, a blank wall),
+    where no tracker finds anything to follow."""
+    height, width = frame.shape[:2]
+    x, y, w, h = roi.bounding_box()
+    x0, y0 = max(int(math.floor(x)), 0), max(int(math.floor(y)), 0)
+    x1, y1 = min(int(math.ceil(x + w)) + 1, width), min(int(math.ceil(y + h)) + 1, height)
+    if x1 <= x0 or y1 <= y0:
+        return 0.0
+    ys, xs = np.mgrid[y0:y1, x0:x1]
+    inside = roi.contains(xs, ys)
+    if not inside.any():
+        return 0.0
+    pixels = within_0_255(frame[y0:y1, x0:x1][inside]) if frame.dtype != np.uint8 else frame[y0:y1, x0:x1][inside]
+    return float(np.asarray(pixels, np.float64).reshape(len(pixels), -1).std(axis=0).max())
 
 
 def _make_tracker(tracker: str | Tracker, params: dict | None) -> Tracker:
@@ -212,6 +237,9 @@ class RunSummary:
     timestamps_from : int or None
         A variable frame rate: the first frame whose ``time_s`` is the stream's timestamp rather than ``frame /
         fps`` (:meth:`~logpolar_track.video.VideoReader.time_of`); None for a constant one.
+    roi_flat : bool
+        The ROI held a flat region on the start frame, its outline and surround included (:func:`roi_spread`
+        of the ROI enlarged :data:`FLAT_ROI_EXTENT` times under :data:`FLAT_ROI_SPREAD`).
     """
 
     video: Path
@@ -230,6 +258,7 @@ class RunSummary:
     csv_out: str | None
     expected_frames: int = 0
     timestamps_from: int | None = None
+    roi_flat: bool = False
 
     @property
     def truncated(self) -> bool:
@@ -348,6 +377,8 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
     with VideoReader(video_path, start_frame=start_frame, fps=fps) as reader:
         ellipse = _resolve_roi(roi, video_path)
         check_roi_fits(ellipse, reader.width, reader.height, source=video_path.name)
+        around = ellipse.moved(ellipse.cx, ellipse.cy, FLAT_ROI_EXTENT)
+        roi_flat = roi_spread(reader.first_frame, around) < FLAT_ROI_SPREAD
         # Inputs are checked (above) before outputs, outputs before any frame is tracked or written.
         _check_outputs(video_path, video_out, csv_out, overwrite)
         announced = frames_to_track(reader.frame_count, start_frame, max_frames) or 0  # 0: not known
@@ -399,4 +430,4 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
         video_fps=reader.fps, video_fps_guessed=reader.fps_guessed, width=reader.width, height=reader.height,
         video_out=written, fourcc=video_writer.fourcc if video_writer is not None else None,
         csv_out=None if csv_writer is None else csv_writer.target, expected_frames=announced,
-        timestamps_from=reader.timestamps_from)
+        timestamps_from=reader.timestamps_from, roi_flat=roi_flat)

@@ -806,3 +806,20 @@ def test_fps_takes_a_fraction_as_ffmpeg_does(tiny_video, workdir):
     assert result.exit_code == 0 and read_rows(result.stdout)[2]["time_s"] == "0.066733"
     bad = invoke(tiny_video.path, "--no-video", "--csv", "-", "--fps", "30/0")
     assert bad.exit_code == 2 and "'30/0' is not a frame rate; give frames per second as a number" in bad.stderr
+
+
+def test_a_roi_on_a_flat_area_gets_a_warning(tmp_path, workdir):
+    """A ROI on a letterbox bar: every frame is lost, and the summary says why."""
+    rng = np.random.default_rng(0)
+    path = tmp_path / "bars.mp4"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), 25.0, (160, 120))
+    for _ in range(5):
+        frame = np.zeros((120, 160, 3), np.uint8)
+        frame[:, 80:] = rng.integers(0, 255, (120, 80, 3))
+        writer.write(frame)
+    writer.release()
+    flat = invoke(path, "--roi", "30,60,15", "--no-video")
+    assert flat.exit_code == 0
+    assert "warning: bars.mp4: the ROI covers a flat area on its start frame (one colour" in flat.stderr
+    textured = invoke(path, "--roi", "120,60,15", "--no-video", "--overwrite")
+    assert textured.exit_code == 0 and "flat area" not in textured.stderr

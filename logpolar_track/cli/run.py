@@ -364,6 +364,8 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
     if summary.truncated:
         click.echo(f"lptrack: warning: {_truncation(label, summary.frames, summary.expected_frames)}",
                    err=True)
+    if summary.roi_flat:
+        click.echo(f"lptrack: warning: {_flat_roi(label)}", err=True)
     if summary.timestamps_from is not None:
         varying = _varying_rate(label, summary.timestamps_from, summary.video_fps, summary.video_out is not None)
         click.echo(f"lptrack: note: {varying}", err=True)
@@ -381,6 +383,11 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
 def _rate_assumed(label: str, fps: float, video: bool) -> str:
     uses = "time_s and the output video" if video else "time_s"
     return f"'{label}' reports no frame rate; assumed {fps:g} fps for {uses} (give --fps to set it)"
+
+
+def _flat_roi(label: str) -> str:
+    return (f"{label}: the ROI covers a flat area on its start frame (one colour: a letterbox bar, a blank "
+            f"wall?), with nothing in it to follow; see where it lies with lptrack frame VIDEO --roi SPEC")
 
 
 def _varying_rate(label: str, first: int, fps: float, video: bool) -> str:
@@ -464,6 +471,8 @@ def _report(summary: BatchSummary, *, quiet: bool, video: bool) -> None:
             if outcome.truncated:
                 click.echo(f"lptrack: warning: {_truncation(outcome.label, outcome.frames, outcome.expected_frames)}",
                            err=True)
+            if outcome.roi_flat:
+                click.echo(f"lptrack: warning: {_flat_roi(outcome.label)}", err=True)
             if outcome.timestamps_from is not None:
                 click.echo(f"lptrack: note: {_varying_rate(outcome.label, *outcome.timestamps_from, video)}",
                            err=True)

@@ -124,11 +124,15 @@ def roi_spread(frame: np.ndarray, roi: Ellipse) -> float:
     x1, y1 = min(int(math.ceil(x + w)) + 1, width), min(int(math.ceil(y + h)) + 1, height)
     if x1 <= x0 or y1 <= y0:
         return 0.0
-    ys, xs = np.mgrid[y0:y1, x0:x1]
+    # Every pixel of a small ROI; at most about 256 x 256 of a large one (a 4K frame's whole-frame ROI would
+    # otherwise take a few hundred MB of index arrays).
+    stride = max(1, math.ceil(max(x1 - x0, y1 - y0) / 256))
+    ys, xs = np.mgrid[y0:y1:stride, x0:x1:stride]
     inside = roi.contains(xs, ys)
     if not inside.any():
         return 0.0
-    pixels = within_0_255(frame[y0:y1, x0:x1][inside]) if frame.dtype != np.uint8 else frame[y0:y1, x0:x1][inside]
+    region = frame[y0:y1:stride, x0:x1:stride]
+    pixels = within_0_255(region[inside]) if frame.dtype != np.uint8 else region[inside]
     return float(np.asarray(pixels, np.float64).reshape(len(pixels), -1).std(axis=0).max())
 
 

@@ -546,7 +546,7 @@ class RunTable:
                    np.array([r.state.score for r in results], float), [r.status for r in results], source)
 
 
-def read_run_csv(path) -> RunTable:
+def read_run_csv(path, video=None) -> RunTable:
     """Read a run CSV and check that it follows the contract.
 
     The header must start with :data:`~logpolar_track.results.COLUMNS` in order (later columns, appended by
@@ -554,16 +554,21 @@ def read_run_csv(path) -> RunTable:
     ``cx``, ``cy``, ``a``, ``b`` (> 0), ``angle_deg``, ``scale`` and ``score`` (0 to 1), a number or nothing in
     ``rotation_deg``, and a ``status`` among ``init``, ``tracked``, ``lost``.
 
+    A batch's stream (``lptrack run ... --csv -``) leads with a ``video`` column: its rows of one video are
+    taken, the only one, or the one whose ``video`` names the file ``video`` (a path).
+
     Raises
     ------
     GroundTruthError
         (exit code 1) Unreadable file, or the first place where it departs from the contract: line number,
-        column, value, and what is expected.
+        column, value, and what is expected; a batch's stream of several videos, none of them ``video``.
     """
     path = Path(path)
     expected = ",".join(COLUMNS)
     hint = f"expected an lptrack run CSV with the header {expected}, or its JSON lines"
     header, body = read_data_file(path, "run CSV", hint)
+    if header[:1] == ["video"]:
+        header, body = _one_video(path, header, body, video)
     if not header:
         raise GroundTruthError(f"run CSV '{path}' is empty; {hint}")
     if tuple(header[:len(COLUMNS)]) != COLUMNS:
@@ -609,6 +614,32 @@ def read_run_csv(path) -> RunTable:
     return RunTable(np.asarray(table["frame"], int), t["time_s"],
                     np.column_stack([t["cx"], t["cy"], t["a"], t["b"], t["angle_deg"]]), t["scale"],
                     t["rotation_deg"], t["score"], table["status"], path.name)
+
+
+def _one_video(path: Path, header: list[str], body: list, video) -> tuple[list[str], list]:
+    """The header and rows of one video of a batch's stream (``video`` its first column), without that column:
+    the only video, or the one whose name is the file ``video``."""
+    names = list(dict.fromkeys(row[0].strip() for _, row in body if row))
+    chosen = names[0] if len(names) == 1 else None
+    if chosen is None and video is not None:
+        chosen = next((name for name in names if _same_file(name, video)), None)
+    if chosen is None:
+        shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
+        none_is = "" if video is None else f", none of them '{video}'"
+        raise GroundTruthError(f"run CSV '{path}' holds the rows of {len(names)} videos ({shown}: its 'video' "
+                               f"column){none_is}; give one video's run (its own CSV, as --out-dir writes them)")
+    return header[1:], [(line, row[1:]) for line, row in body if row and row[0].strip() == chosen]
+
+
+def _same_file(name: str, video) -> bool:
+    """Whether a batch stream's ``video`` value ``name`` names the file ``video``."""
+    a, b = Path(name), Path(video)
+    if a == b:
+        return True
+    try:
+        return a.exists() and b.exists() and a.samefile(b)
+    except OSError:
+        return False
 
 
 def _as_table(run) -> RunTable:

@@ -288,6 +288,29 @@ def bad_csvs(folder: Path, good: Path) -> dict[str, Path]:
     return paths
 
 
+def test_read_run_csv_takes_one_video_of_a_batch_stream(tiny_run, tmp_path):
+    """``lptrack run a.mp4 b.mp4 --csv -`` leads with a 'video' column: plot and sheet refused it by its header;
+    the rows of the only video, or of the video named, are taken."""
+    video, run_csv, _ = tiny_run
+    lines = run_csv.read_text().splitlines()
+    other = tmp_path / "other.mp4"
+    other.write_bytes(b"")
+    stream = tmp_path / "all.csv"
+    stream.write_text("\n".join(["video," + lines[0]] + [f"{video.path},{line}" for line in lines[1:]]
+                                 + [f"{other},{line}" for line in lines[1:5]]) + "\n")
+    alone = read_run_csv(run_csv)
+    chosen = read_run_csv(stream, video.path)
+    assert list(chosen.frames) == list(alone.frames) and np.array_equal(chosen.ellipses, alone.ellipses)
+    assert len(read_run_csv(stream, other)) == 4
+    with pytest.raises(GroundTruthError, match=r"holds the rows of 2 videos .*'video' column\); give one video's"):
+        read_run_csv(stream)
+    with pytest.raises(GroundTruthError, match="none of them 'elsewhere.mp4'"):
+        read_run_csv(stream, "elsewhere.mp4")
+    single = tmp_path / "single.csv"
+    single.write_text("\n".join(stream.read_text().splitlines()[:21]) + "\n")
+    assert list(read_run_csv(single).frames) == list(alone.frames)
+
+
 def test_read_run_csv_follows_the_contract(tiny_run, tmp_path):
     _, run_csv, _ = tiny_run
     table = read_run_csv(run_csv)

@@ -154,7 +154,7 @@ def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path 
         raise UsageError(hint)
     if no_video and video is not None:
         raise UsageError("--video and --no-video contradict each other; give one of them")
-    table = read_run_csv(run_csv)
+    table = read_run_csv(run_csv, video)
     note = None
     if video is None and not no_video:
         video = find_video_for_csv(run_csv)
@@ -200,7 +200,7 @@ def sheet(video: Path, run_csv: Path, out_png: Path | None, cols: int, rows: int
     if rows is not None and count is not None:
         raise UsageError(f"--rows and --count contradict each other: --rows {rows} shows {cols} x {rows} frames, "
                          f"--count {count} shows {count} frames in {cols} columns; give one of them")
-    table = read_run_csv(run_csv)
+    table = read_run_csv(run_csv, video)
     out_png = out_png or Path(f"{_run_stem(run_csv)}.sheet.png")
     path = write_contact_sheet(video, table, out_png, cols=cols, rows=rows, count=count, width=width,
                                overwrite=overwrite)

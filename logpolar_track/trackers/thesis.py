@@ -43,12 +43,7 @@ class LogPolarMatcher:
 
     def __init__(self, a: float, b: float, *, n_rho: int, n_theta: int):
         self.grid = LogPolarGrid(a, b, n_rho=n_rho, n_theta=n_theta)
-        # Where the outer ring's samples lie closer than _LOWPASS_SPACING_PX, every ring oversamples the pixels and
-        # the high frequencies of the log-polar image are bilinear interpolation's pattern, fixed to the pixel grid:
-        # it does not turn with the object and pulls the peak towards no change. A narrower low-pass there.
-        spacing = 2 * math.pi * math.sqrt(a * b) / n_theta
-        lowpass = _LOWPASS * min(1.0, spacing / _LOWPASS_SPACING_PX)
-        self.correlator = PhaseCorrelator((n_rho, n_theta), lowpass=lowpass)
+        self.correlator = PhaseCorrelator((n_rho, n_theta))
         self.template: np.ndarray | None = None
 
     def spectra(self, gray: np.ndarray, centres: np.ndarray, scale: float, angle_deg: float) -> np.ndarray:
@@ -66,13 +61,6 @@ class LogPolarMatcher:
                 float(peak.d_theta[index]) * self.grid.degrees_per_bin)
 
 
-#: The correlators' low-pass (cycles per sample, see PhaseCorrelator) where the outer ring's samples lie at least
-#: _LOWPASS_SPACING_PX pixels apart; narrowed in proportion below that. With 0.1 at every size a sub-bin turn was
-#: read short on small objects (0.40-0.44 of it at radius 20, 0.80-0.89 at 30; about all of it from 40). A disc
-#: turning 1 degree and growing 0.4 % a frame, 30 frames, fixed / diffdecomp / occlusion / update, 2 seeds: mean
-#: rotation error at radius 15 / 20 / 30 px 2.23 / 1.13 / 0.31 degrees -> 0.72 / 0.61 / 0.22, scale 2.7 / 1.7 /
-#: 0.5 % -> 1.1 / 0.9 / 0.35 %, frames lost at radius 15 8 -> 0; from radius 45 (default grid) unchanged.
-_LOWPASS, _LOWPASS_SPACING_PX = 0.1, 2.0
 #: Most samples the search may take from one frame (window centres x log-polar samples): the defaults take about
 #: 1 million (121 x 64 x 128), and sampling maps of this many float32 take 256 MB each.
 MAX_SEARCH_SAMPLES = 1 << 26

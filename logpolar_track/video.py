@@ -345,6 +345,7 @@ class VideoReader:
         self._stamped = self._stamped and not self.fps_guessed
         self.timestamps_from: int | None = None
         self._last_time = -math.inf
+        self._stamp_offset: float | None = None
         count = self._cap.get(cv2.CAP_PROP_FRAME_COUNT)
         self.frame_count = int(count) if math.isfinite(count) and count > 0 else 0
         # Skip to the start frame by decoding: exact, unlike CAP_PROP_POS_FRAMES on inter-coded streams.
@@ -385,12 +386,19 @@ class VideoReader:
 
     # -- reading ---------------------------------------------------------------------------------------
     def time_of(self, index: int, stamp: float | None = None) -> float:
-        """Time in seconds of frame ``index``: ``index / fps``, or the frame's timestamp ``stamp`` (seconds from
-        the stream's start) from the first frame whose timestamp lies more than half a frame from that on
-        (:attr:`timestamps_from`): a variable frame rate, as phones record in low light, where ``index / fps``
-        (the average rate) drifts by seconds. A constant rate's timestamps, which some containers round to
-        milliseconds, never leave ``index / fps``. Times stay increasing whatever a stream's timestamps do."""
+        """Time in seconds of frame ``index``: ``index / fps``, or the frame's timestamp ``stamp`` (seconds, taken
+        relative to the first frame delivered, which keeps ``index / fps``) from the first frame whose timestamp
+        lies more than half a frame from that on (:attr:`timestamps_from`): a variable frame rate, as phones
+        record in low light, where ``index / fps`` (the average rate) drifts by seconds. A constant rate's
+        timestamps, which some containers round to milliseconds, never leave ``index / fps``. Times stay
+        increasing whatever a stream's timestamps do."""
         nominal = index / self.fps
+        if stamp is not None and self._stamped:
+            if self._stamp_offset is None:
+                # Measured from the first frame delivered, which keeps its nominal time: a stream cut mid-GOP
+                # starts with a frame stamped after 0, a constant rate all the same.
+                self._stamp_offset = stamp - nominal
+            stamp -= self._stamp_offset
         usable = stamp is not None and math.isfinite(stamp) and stamp > self._last_time
         if (self.timestamps_from is None and usable and self._stamped
                 and abs(stamp - nominal) > 0.5 / self.fps):

@@ -823,3 +823,44 @@ def test_a_roi_on_a_flat_area_gets_a_warning(tmp_path, workdir):
     assert "warning: bars.mp4: the ROI covers a flat area on its start frame (one colour" in flat.stderr
     textured = invoke(path, "--roi", "120,60,15", "--no-video", "--overwrite")
     assert textured.exit_code == 0 and "flat area" not in textured.stderr
+
+
+class _DroppedFrames:
+    """A capture of the tiny video (30 fps) whose stream timestamps say that 10 frames were dropped after frame 9
+    (a phone slowing down): frame k >= 10 is stamped (k + 10) / 30 s. Composition: cv2 classes are unsafe to
+    subclass."""
+
+    def __init__(self, path):
+        self._cap = cv2.VideoCapture(str(path))
+        self._read = 0
+
+    def read(self):
+        ok, frame = self._cap.read()
+        self._read += ok
+        return ok, frame
+
+    def get(self, prop):
+        if prop == cv2.CAP_PROP_POS_MSEC:
+            index = self._read - 1
+            return (index + (10 if index >= 10 else 0)) * 1000.0 / 30.0
+        return self._cap.get(prop)
+
+    def __getattr__(self, name):
+        return getattr(self._cap, name)
+
+
+def test_a_varying_frame_rate_is_timed_by_the_streams_timestamps(tiny_video, workdir, monkeypatch):
+    import logpolar_track.video as video_module
+
+    monkeypatch.setattr(video_module, "_open_capture", _DroppedFrames)
+    result = invoke(tiny_video.path, "--no-video", "--csv", "-")
+    assert result.exit_code == 0, result.stderr
+    times = [row["time_s"] for row in read_rows(result.stdout)]
+    assert times[9] == "0.300000" and times[10] == "0.666667" and times[19] == "0.966667"
+    assert ("note: tiny.mp4's frame rate varies: time_s follows its timestamps from frame 10 on (before, frame / "
+            "30 fps was within half a frame of them)") in result.stderr
+    # --fps keeps frame / fps; a batch says it too.
+    given = invoke(tiny_video.path, "--no-video", "--csv", "-", "--fps", "30")
+    assert read_rows(given.stdout)[10]["time_s"] == "0.333333" and "varies" not in given.stderr
+    batch = invoke(tiny_video.path, tiny_video.path.parent, "--no-video", "--out-dir", "out", "--jobs", "1")
+    assert "tiny.mp4's frame rate varies: time_s follows its timestamps from frame 10 on" in batch.stderr

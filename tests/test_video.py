@@ -638,3 +638,11 @@ def test_a_negative_start_frame_is_bad_usage(tiny_video):
 
     with pytest.raises(UsageError, match="start frame must be >= 0, got -1"):
         VideoReader(tiny_video.path, start_frame=-1)
+
+
+def test_a_stream_whose_first_frame_is_stamped_late_keeps_its_nominal_times(tiny_video):
+    """A recording cut mid-GOP: its first decodable frame is stamped 0.133 s, the rate constant all the same;
+    compared with index / fps as they stood, every frame was taken for a varying rate and shifted."""
+    with VideoReader(tiny_video.path) as reader:  # 30 fps
+        assert [reader.time_of(i, 0.133 + i / 30) for i in range(4)] == [i / 30 for i in range(4)]
+        assert reader.timestamps_from is None

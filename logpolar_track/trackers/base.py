@@ -10,6 +10,7 @@ from __future__ import annotations
 import difflib
 import inspect
 import math
+import re
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Callable, ClassVar, Iterable
@@ -306,17 +307,16 @@ def create_tracker(name: str, **params) -> Tracker:
     cls = tracker_class(name)
     if not getattr(cls, "available", lambda: True)():
         raise UsageError(f"tracker '{name}' is not available here: {cls.unavailable_reason()}")
-    taken = tracker_parameters(name)
-    unknown = [key for key in params if key not in taken]
-    if unknown:
-        key = unknown[0]
-        raise UsageError(f"tracker '{name}' has no parameter '{key}'{did_you_mean(key, taken)}; it takes: "
-                         f"{', '.join(taken) or 'none'}")
     try:
         return cls(**params)
     except LptrackError:
         raise
     except (TypeError, ValueError, OverflowError) as exc:  # an unknown keyword, or a check not in lptrack's terms
+        unknown = re.search(r"unexpected keyword argument '(\w+)'", str(exc)) if isinstance(exc, TypeError) else None
+        if unknown:  # said as the CLI's --param says it
+            key, taken = unknown.group(1), tracker_parameters(name)
+            raise UsageError(f"tracker '{name}' has no parameter '{key}'{did_you_mean(key, taken)}; it takes: "
+                             f"{', '.join(taken) or 'none'}") from None
         raise UsageError(f"bad parameters for tracker '{name}': {exc}") from None
 
 

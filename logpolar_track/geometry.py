@@ -233,6 +233,11 @@ def parse_roi(spec: str) -> Ellipse:
     return Ellipse(cx, cy, a, b, wrap_degrees(angle))
 
 
+def _numbers(values: np.ndarray) -> str:
+    """``(300, 250, 64)``: numbers for messages, as _fmt writes them."""
+    return "(" + ", ".join(_fmt(float(v)) for v in values[:8]) + (", ..." if len(values) > 8 else "") + ")"
+
+
 def as_ellipse(roi) -> Ellipse:
     """A ROI as the Python API takes it: an :class:`Ellipse`, a ``--roi`` string (:func:`parse_roi`), or its 3 or
     5 numbers in a sequence (``(cx, cy, r)``, ``(cx, cy, a, b, angle)``: pixels, degrees counter-clockwise).
@@ -246,15 +251,19 @@ def as_ellipse(roi) -> Ellipse:
         return roi
     if isinstance(roi, str):
         return parse_roi(roi)
+    accepted = f"a ROI is an Ellipse, a string {ROI_SYNTAX}, or those 3 or 5 numbers"
     try:
-        values = [float(v) for v in np.asarray(roi, dtype=np.float64).reshape(-1)]
+        values = np.asarray(roi, dtype=np.float64) if roi is not None else None
     except (TypeError, ValueError):
-        raise RoiError(f"a ROI is an Ellipse, a string {ROI_SYNTAX}, or those 3 or 5 numbers; got "
-                       f"{type(roi).__name__} {roi!r:.60}") from None
+        values = None
+    if values is None or values.ndim != 1:
+        raise RoiError(f"{accepted}; got {type(roi).__name__} {roi!r:.60}")
     if len(values) == 4:
-        raise RoiError(f"a ROI of 4 numbers {tuple(values)} looks like an OpenCV box (x, y, w, h); lptrack takes a "
+        raise RoiError(f"a ROI of 4 numbers {_numbers(values)} looks like an OpenCV box (x, y, w, h); lptrack takes a "
                        f"circle or an ellipse: logpolar_track.geometry.ellipse_in_box(x, y, w, h) is the one inside it")
-    return parse_roi(",".join(repr(v) for v in values))
+    if len(values) not in (3, 5):
+        raise RoiError(f"{accepted}; got {counted(len(values), 'number')}: {_numbers(values)}")
+    return parse_roi(",".join(repr(float(v)) for v in values))
 
 
 def check_roi_fits(roi: Ellipse, width: int, height: int, *, source: str | None = None,

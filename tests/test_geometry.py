@@ -194,7 +194,9 @@ def test_as_ellipse_takes_what_a_python_user_passes(roi):
 @pytest.mark.parametrize("roi, fragment", [
     ((10, 20, 30, 40), "looks like an OpenCV box (x, y, w, h); lptrack takes a circle or an ellipse: "
                        "logpolar_track.geometry.ellipse_in_box(x, y, w, h)"),
-    ((1, 2), "has 2 numbers; expected"),
+    ((1, 2), "or those 3 or 5 numbers; got 2 numbers: (1, 2)"),
+    (None, "a ROI is an Ellipse, a string"),
+    ([[300, 250, 64]], "a ROI is an Ellipse, a string"),
     (object(), "a ROI is an Ellipse, a string"),
     ({"cx": 1}, "a ROI is an Ellipse, a string"),
 ])

@@ -368,7 +368,7 @@ class TemplateUpdateTracker(FixedTemplateTracker):
         if (anchor.score >= self.update_threshold
                 and math.hypot(anchor.cx - estimate.cx, anchor.cy - estimate.cy) <= 1.0
                 and abs(math.log(anchor.scale / estimate.scale)) <= grid.log_step
-                and abs(anchor.rotation_deg - estimate.rotation_deg) <= grid.degrees_per_bin):
+                and abs(wrap_degrees(anchor.rotation_deg - estimate.rotation_deg)) <= grid.degrees_per_bin):
             centre = np.array([[estimate.cx, estimate.cy]])
             self.current_template = self.matcher.spectra(self._gray, centre, estimate.scale, self._angle(estimate))
             if self.coarse_matcher is not None:

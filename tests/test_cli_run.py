@@ -173,7 +173,7 @@ def test_data_format_follows_the_csv_extension_unless_given(tiny_video, workdir)
     # A name another reader takes for another format (pandas decompresses .gz by the name).
     gz = invoke(tiny_video.path, "--no-video", "--csv", "w.csv.gz")
     assert gz.exit_code == 0 and Path("w.csv.gz").read_text().splitlines()[0] == HEADER
-    assert "note: writing CSV to 'w.csv.gz', whose name says gzip; lptrack writes CSV or JSON lines" in gz.stderr
+    assert "note: writing CSV to 'w.csv.gz', whose name says gzip; lptrack does not compress" in gz.stderr
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/null"), reason="needs /dev/null")

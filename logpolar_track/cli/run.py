@@ -62,9 +62,10 @@ class TrackerChoice(click.Choice):
 #: What each of FORMATS is called in messages.
 _FORMAT_NAMES = {"csv": "CSV", "jsonl": "JSON lines"}
 #: Data-file extensions of formats lptrack does not write, and what readers take them for.
-_OTHER_DATA_SUFFIXES = {".json": "one JSON document", ".tsv": "tab-separated values", ".gz": "gzip",
-                        ".bz2": "bzip2", ".xz": "xz", ".zst": "zstd", ".zip": "zip", ".parquet": "Parquet",
-                        ".xlsx": "Excel"}
+#: (what readers take the file for, whether that is a compression).
+_OTHER_DATA_SUFFIXES = {".json": ("one JSON document", False), ".tsv": ("tab-separated values", False),
+                        ".parquet": ("Parquet", False), ".xlsx": ("Excel", False), ".gz": ("gzip", True),
+                        ".bz2": ("bzip2", True), ".xz": ("xz", True), ".zst": ("zstd", True), ".zip": ("zip", True)}
 
 
 def _tracker_lines() -> str:
@@ -191,9 +192,10 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
                    f"whose name says {_FORMAT_NAMES[next(k for k, v in FORMATS.items() if v == suffix)]}", err=True)
     if suffix in _OTHER_DATA_SUFFIXES and not quiet:
         # pandas.read_csv('t.csv.gz') decompresses by the name, and fails on plain text.
-        click.echo(f"lptrack: note: writing {_FORMAT_NAMES[data_format]} to '{csv_out}', whose name says "
-                   f"{_OTHER_DATA_SUFFIXES[suffix]}; lptrack writes CSV or JSON lines (--format jsonl), "
-                   f"uncompressed", err=True)
+        what, compressed = _OTHER_DATA_SUFFIXES[suffix]
+        instead = "lptrack does not compress" if compressed else "lptrack writes CSV or JSON lines (--format jsonl)"
+        click.echo(f"lptrack: note: writing {_FORMAT_NAMES[data_format]} to '{csv_out}', whose name says {what}; "
+                   f"{instead}", err=True)
     if no_video and video_out is not None:
         raise UsageError("--out and --no-video contradict each other; give one of them")
     if overwrite and skip_existing:
@@ -387,7 +389,8 @@ def _rate_assumed(label: str, fps: float, video: bool) -> str:
 
 def _flat_roi(label: str) -> str:
     return (f"{label}: the ROI covers a flat area on its start frame (one colour: a letterbox bar, a blank "
-            f"wall?), with nothing in it to follow; see where it lies with lptrack frame VIDEO --roi SPEC")
+            f"wall?), with nothing in it to follow: its track means nothing; see where it lies with lptrack frame "
+            f"VIDEO --roi SPEC")
 
 
 def _varying_rate(label: str, first: int, fps: float, video: bool) -> str:

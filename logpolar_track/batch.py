@@ -106,7 +106,8 @@ class VideoOutcome:
     counts tracked frames; ``expected_frames`` is what the container announced, and ``truncated`` says that
     fewer came (:attr:`RunSummary.truncated <logpolar_track.pipeline.RunSummary.truncated>`). ``fps_assumed``
     is the frame rate assumed for a source that reports none (an image sequence, when no ``fps`` was given), else
-    None. ``timestamps_from`` is, for a variable frame rate, ``(first frame timed by its timestamp, fps)``
+    None. ``timestamps_from`` is, for a variable frame rate, ``(first frame timed by its timestamp, fps, start
+    frame)``
     (:attr:`RunSummary.timestamps_from <logpolar_track.pipeline.RunSummary.timestamps_from>`), else None.
     ``roi_flat``: the ROI held a flat region on the start frame (:attr:`RunSummary.roi_flat`).
     """
@@ -121,7 +122,7 @@ class VideoOutcome:
     truncated: bool = False
     rows: str | None = None
     fps_assumed: float | None = None
-    timestamps_from: tuple[int, float] | None = None
+    timestamps_from: tuple[int, float, int] | None = None
     roi_flat: bool = False
 
 
@@ -576,7 +577,7 @@ def run_job(job: VideoJob, report: Callable[[int], None] | None = None) -> Video
                         truncated=summary.truncated, rows=None if buffer is None else buffer.getvalue(),
                         fps_assumed=summary.video_fps if summary.video_fps_guessed else None,
                         timestamps_from=(None if summary.timestamps_from is None
-                                         else (summary.timestamps_from, summary.video_fps)),
+                                         else (summary.timestamps_from, summary.video_fps, summary.start_frame)),
                         roi_flat=summary.roi_flat)
 
 

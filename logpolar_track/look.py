@@ -169,8 +169,8 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None, f
         raise FrameRangeError(f"{asked} lies past the end of '{path}', which has {counted(n, 'frame')}: give "
                               f"{valid}") from None
     with reader:
-        return Frame(reader.first_frame.copy(), index, reader.time_of(index), reader.fps, reader.fps_guessed,
-                     path)
+        _, time_s, image = next(iter(reader))  # its time as a run's CSV gives it (a varying rate's timestamp)
+        return Frame(image.copy(), index, time_s, reader.fps, reader.fps_guessed, path)
 
 
 def _label(image: np.ndarray, text: str, org: tuple[int, int], colour, *, scale: float = 0.4,

@@ -355,6 +355,8 @@ class VideoReader:
                 if skipped == 0:
                     raise VideoError(f"video '{self.path}' contains no frames")
                 raise _past_the_end(self.start_frame, self.path, skipped)
+            if skipped == 0 and self._stamped:
+                self._stamp_offset = self._stamp()  # frame 0's stamp: times count from it (see time_of)
         ok, first = self._cap.read()
         self._first_stamp = self._stamp()
         if not ok or first is None or first.size == 0:
@@ -387,7 +389,7 @@ class VideoReader:
     # -- reading ---------------------------------------------------------------------------------------
     def time_of(self, index: int, stamp: float | None = None) -> float:
         """Time in seconds of frame ``index``: ``index / fps``, or the frame's timestamp ``stamp`` (seconds, taken
-        relative to the first frame delivered, which keeps ``index / fps``) from the first frame whose timestamp
+        relative to the stream's frame 0, whose time is 0) from the first frame whose timestamp
         lies more than half a frame from that on (:attr:`timestamps_from`): a variable frame rate, as phones
         record in low light, where ``index / fps`` (the average rate) drifts by seconds. A constant rate's
         timestamps, which some containers round to milliseconds, never leave ``index / fps``. Times stay
@@ -395,8 +397,8 @@ class VideoReader:
         nominal = index / self.fps
         if stamp is not None and self._stamped:
             if self._stamp_offset is None:
-                # Measured from the first frame delivered, which keeps its nominal time: a stream cut mid-GOP
-                # starts with a frame stamped after 0, a constant rate all the same.
+                # Frame 0 is at time 0: a stream cut mid-GOP starts with a frame stamped after 0, a constant rate
+                # all the same. (Past a start frame, frame 0's stamp was taken while skipping to it.)
                 self._stamp_offset = stamp - nominal
             stamp -= self._stamp_offset
         usable = stamp is not None and math.isfinite(stamp) and stamp > self._last_time

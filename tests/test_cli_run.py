@@ -839,6 +839,11 @@ class _DroppedFrames:
         self._read += ok
         return ok, frame
 
+    def grab(self):
+        ok = self._cap.grab()
+        self._read += ok
+        return ok
+
     def get(self, prop):
         if prop == cv2.CAP_PROP_POS_MSEC:
             index = self._read - 1
@@ -859,6 +864,10 @@ def test_a_varying_frame_rate_is_timed_by_the_streams_timestamps(tiny_video, wor
     assert times[9] == "0.300000" and times[10] == "0.666667" and times[19] == "0.966667"
     assert ("note: tiny.mp4's frame rate varies: time_s follows its timestamps from frame 10 on (before, frame / "
             "30 fps was within half a frame of them)") in result.stderr
+    # From a start frame past the change, times still count from frame 0.
+    later = invoke(tiny_video.path, "--no-video", "--csv", "-", "--start-frame", "12")
+    assert read_rows(later.stdout)[0]["time_s"] == "0.733333"
+    assert "tiny.mp4's frame rate varies: time_s follows its timestamps, not frame / 30 fps" in later.stderr
     # --fps keeps frame / fps; a batch says it too.
     given = invoke(tiny_video.path, "--no-video", "--csv", "-", "--fps", "30")
     assert read_rows(given.stdout)[10]["time_s"] == "0.333333" and "varies" not in given.stderr

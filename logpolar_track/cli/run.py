@@ -369,7 +369,8 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
     if summary.roi_flat:
         click.echo(f"lptrack: warning: {_flat_roi(label)}", err=True)
     if summary.timestamps_from is not None:
-        varying = _varying_rate(label, summary.timestamps_from, summary.video_fps, summary.video_out is not None)
+        varying = _varying_rate(label, summary.timestamps_from, summary.video_fps, summary.start_frame,
+                                summary.video_out is not None)
         click.echo(f"lptrack: note: {varying}", err=True)
     outputs = []
     if summary.video_out is not None:
@@ -393,8 +394,10 @@ def _flat_roi(label: str) -> str:
             f"VIDEO --roi SPEC")
 
 
-def _varying_rate(label: str, first: int, fps: float, video: bool) -> str:
+def _varying_rate(label: str, first: int, fps: float, start: int, video: bool) -> str:
     played = f"; the annotated video plays at a constant {fps:g} fps" if video else ""
+    if first == start:
+        return f"{label}'s frame rate varies: time_s follows its timestamps, not frame / {fps:g} fps{played}"
     return (f"{label}'s frame rate varies: time_s follows its timestamps from frame {first} on (before, frame / "
             f"{fps:g} fps was within half a frame of them){played}")
 

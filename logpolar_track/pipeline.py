@@ -109,8 +109,9 @@ def _resolve_roi(roi: RoiLike, video_path) -> Ellipse:
     return found
 
 
-#: Levels (standard deviation, see roi_spread) under which a ROI on its start frame holds nothing to follow, measured over
-#: the ROI enlarged FLAT_ROI_EXTENT times: a plain ball is flat inside, and its outline is what trackers follow.
+#: Levels (standard deviation, see roi_spread) under which a ROI on its start frame holds nothing to follow,
+#: measured over the ROI enlarged FLAT_ROI_EXTENT times: a plain ball is flat inside, and its outline is what
+#: trackers follow.
 FLAT_ROI_SPREAD, FLAT_ROI_EXTENT = 1.0, 1.5
 
 

@@ -114,8 +114,8 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None, f
     index : int, optional
         Frame index, 0 = first frame of the file. Default 0.
     time_s : float, optional
-        Instead of ``index``: time in seconds; the frame is ``round(time_s * fps)``, or the last frame for a
-        time within its time on screen (before ``frame count / fps``).
+        Instead of ``index``: time in seconds; the frame whose time, as a run's CSV gives it (``index / fps``, or
+        a varying frame rate's timestamps), is nearest, or the last frame for a time within its time on screen.
     fps : float, optional
         Frames per second instead of the video's own (an image sequence has none), as ``lptrack run --fps``.
 
@@ -143,9 +143,7 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None, f
     if time_s is not None:
         if not (math.isfinite(time_s) and time_s >= 0):
             raise UsageError(f"time must be a number of seconds >= 0, got {time_s}")
-        with VideoReader(path, fps=fps) as reader:
-            rate = reader.fps
-        index = int(round(time_s * rate))
+        return _frame_at_time(path, time_s, fps)
     index = 0 if index is None else int(index)
     if index < 0:
         raise UsageError(f"frame index must be >= 0, got {index}")
@@ -157,20 +155,32 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None, f
         n = count_frames(path)  # raises the video's own error if it is unreadable
         if index < n:  # the video became unreadable half-way: say so rather than blame the index
             raise
-        with VideoReader(path, fps=fps) as reader:
-            rate = reader.fps
-        if time_s is not None and n and time_s < n / rate:
-            # Within the last frame's time on screen, rounded up past it: that frame is the one shown.
-            return read_frame(path, n - 1, fps=fps)
-        asked, valid = f"frame {index}", f"a frame from 0 to {n - 1}"
-        if time_s is not None:  # a time was asked for: say which times there are too (roi takes no time)
-            asked = f"time {time_s:g} s (frame {index} at {rate:g} fps)"
-            valid += f" or a time before {n / rate:.3f} s"
-        raise FrameRangeError(f"{asked} lies past the end of '{path}', which has {counted(n, 'frame')}: give "
-                              f"{valid}") from None
+        raise FrameRangeError(f"frame {index} lies past the end of '{path}', which has {counted(n, 'frame')}: "
+                              f"give a frame from 0 to {n - 1}") from None
     with reader:
         _, time_s, image = next(iter(reader))  # its time as a run's CSV gives it (a varying rate's timestamp)
         return Frame(image.copy(), index, time_s, reader.fps, reader.fps_guessed, path)
+
+
+def _frame_at_time(path: Path, time_s: float, fps: float | None) -> Frame:
+    """The frame whose time (as a run's CSV gives it: ``index / fps``, or a varying rate's timestamp) is nearest
+    ``time_s`` (of two as near, the later), or the last frame for a time within its time on screen."""
+    with VideoReader(path, fps=fps) as reader:
+        previous = None
+        for index, time_i, image in reader:
+            if time_i >= time_s:
+                if previous is not None and time_s - previous[1] < time_i - time_s:
+                    index, time_i, image = previous
+                return Frame(image.copy(), index, time_i, reader.fps, reader.fps_guessed, path)
+            previous = index, time_i, image
+        index, time_i, image = previous
+        end = time_i + 1.0 / reader.fps  # the last frame shows until then
+        if time_s < end:
+            return Frame(image.copy(), index, time_i, reader.fps, reader.fps_guessed, path)
+        n = index + 1
+        raise FrameRangeError(f"time {time_s:g} s lies past the end of '{path}', which has {counted(n, 'frame')} "
+                              f"(at {reader.fps:g} fps): give a time before {end:.3f} s or a frame from 0 to "
+                              f"{n - 1}")
 
 
 def _label(image: np.ndarray, text: str, org: tuple[int, int], colour, *, scale: float = 0.4,

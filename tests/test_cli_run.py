@@ -873,3 +873,16 @@ def test_a_varying_frame_rate_is_timed_by_the_streams_timestamps(tiny_video, wor
     assert read_rows(given.stdout)[10]["time_s"] == "0.333333" and "varies" not in given.stderr
     batch = invoke(tiny_video.path, tiny_video.path.parent, "--no-video", "--out-dir", "out", "--jobs", "1")
     assert "tiny.mp4's frame rate varies: time_s follows its timestamps from frame 10 on" in batch.stderr
+
+
+def test_a_frame_at_a_time_of_a_varying_rate_is_found_by_its_timestamps(tiny_video, monkeypatch):
+    """lptrack frame --time: frame 11 is at (11 + 10) / 30 = 0.7 s by its stamp (round(0.7 x 30) = 21 lies past
+    the end of the 20 frames), and its caption's time is the run's."""
+    import logpolar_track.video as video_module
+    from logpolar_track.look import read_frame
+
+    monkeypatch.setattr(video_module, "_open_capture", _DroppedFrames)
+    frame = read_frame(tiny_video.path, time_s=0.7)
+    assert frame.index == 11 and frame.time_s == pytest.approx(0.7)
+    assert read_frame(tiny_video.path, time_s=0.45).index == 9  # 0.3 s is nearer than frame 10's 0.667 s
+    assert read_frame(tiny_video.path, 11).time_s == pytest.approx(0.7)

@@ -613,6 +613,14 @@ class Track:
 RUN_CSV_REQUIRED = ("frame", "cx", "cy", "a", "b", "angle_deg")
 
 
+def several_videos(path, names: list[str], wanted: str, extra: str = "") -> GroundTruthError:
+    """The error for a batch's stream (a ``video`` column) of several ``names`` where one video's run is needed:
+    ``wanted`` says what to do with one (``extra`` follows the list)."""
+    shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
+    return GroundTruthError(f"run CSV '{path}' holds the rows of {len(names)} videos ({shown}: its 'video' "
+                            f"column){extra}; {wanted} (its own CSV, as --out-dir writes them)")
+
+
 def read_track_csv(path) -> Track:
     """Read a run CSV (``frame,time_s,cx,cy,a,b,angle_deg,scale,rotation_deg,score,status``) as predictions.
 
@@ -633,9 +641,7 @@ def read_track_csv(path) -> Track:
     if len(videos) > 1:
         # A batch's stream (``lptrack run a.mp4 b.mp4 --csv -``): its videos' frame numbers overlap, and the last
         # video's rows were scored against the first one's ground truth.
-        shown = ", ".join(str(v) for v in videos[:3]) + (", ..." if len(videos) > 3 else "")
-        raise GroundTruthError(f"run CSV '{path}' holds the rows of {len(videos)} videos ({shown}: its 'video' "
-                               f"column); score one video's run (its own CSV, as --out-dir writes them)")
+        raise several_videos(path, [str(v) for v in videos], "score one video's run")
     try:
         frames = np.array([int(float(r["frame"])) for r in rows])
         ell = np.array([[_float(r[c]) for c in ("cx", "cy", "a", "b", "angle_deg")] for r in rows], float)

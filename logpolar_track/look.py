@@ -38,7 +38,8 @@ import numpy as np
 from .datasets import load_ground_truth
 from .draw import LOST_COLOUR, TRACKED_COLOUR, draw_state
 from .errors import FrameRangeError, OutputError, RoiError, UsageError, VideoError, counted
-from .evaluate import GroundTruthError, Track, read_data_file, rotation_errors, scale_errors, score_track
+from .evaluate import (GroundTruthError, Track, read_data_file, rotation_errors, scale_errors, score_track,
+                       several_videos)
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
 from .results import COLUMNS, FrameResult, off_contract
 from .trackers.base import TrackState
@@ -634,10 +635,7 @@ def _one_video(path: Path, header: list[str], body: list, video) -> tuple[list[s
     if chosen is None and video is not None:
         chosen = next((name for name in names if _same_file(name, video)), None)
     if chosen is None:
-        shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
-        none_is = "" if video is None else f", none of them '{video}'"
-        raise GroundTruthError(f"run CSV '{path}' holds the rows of {len(names)} videos ({shown}: its 'video' "
-                               f"column){none_is}; give one video's run (its own CSV, as --out-dir writes them)")
+        raise several_videos(path, names, "give one video's run", "" if video is None else f", none of them '{video}'")
     return header[1:], [(line, row[1:]) for line, row in body if row and row[0].strip() == chosen]
 
 

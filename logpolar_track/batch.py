@@ -107,8 +107,7 @@ class VideoOutcome:
     fewer came (:attr:`RunSummary.truncated <logpolar_track.pipeline.RunSummary.truncated>`). ``fps_assumed``
     is the frame rate assumed for a source that reports none (an image sequence, when no ``fps`` was given), else
     None. ``timestamps_from`` is, for a variable frame rate, ``(first frame timed by its timestamp, fps, start
-    frame)``
-    (:attr:`RunSummary.timestamps_from <logpolar_track.pipeline.RunSummary.timestamps_from>`), else None.
+    frame)`` (:attr:`RunSummary.timestamps_from <logpolar_track.pipeline.RunSummary.timestamps_from>`), else None.
     ``roi_flat``: the ROI held a flat region on the start frame (:attr:`RunSummary.roi_flat`).
     """
 

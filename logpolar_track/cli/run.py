@@ -26,8 +26,8 @@ from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..trackers.base import did_you_mean
 from ..video import check_fps, guess_image_sequence, input_label, make_output_folder, remove_empty_folders
-from . import (EXIT_FAILURE, PARAM_HELP, FrameRate, OneLineErrors, check_jobs_or_scheduler, main, parse_param_options,
-               parse_roi_option, stdout_reader_left)
+from . import (EXIT_FAILURE, PARAM_HELP, FrameRate, OneLineErrors, check_jobs_or_scheduler, main,
+               parse_param_options, parse_roi_option, stdout_reader_left)
 
 
 class RunCommand(OneLineErrors):
@@ -61,8 +61,8 @@ class TrackerChoice(click.Choice):
 
 #: What each of FORMATS is called in messages.
 _FORMAT_NAMES = {"csv": "CSV", "jsonl": "JSON lines"}
-#: Data-file extensions of formats lptrack does not write, and what readers take them for.
-#: (what readers take the file for, whether that is a compression).
+#: Data-file extensions of formats lptrack does not write: (what readers take the file for, whether that is a
+#: compression).
 _OTHER_DATA_SUFFIXES = {".json": ("one JSON document", False), ".tsv": ("tab-separated values", False),
                         ".parquet": ("Parquet", False), ".xlsx": ("Excel", False), ".gz": ("gzip", True),
                         ".bz2": ("bzip2", True), ".xz": ("xz", True), ".zst": ("zstd", True), ".zip": ("zip", True)}

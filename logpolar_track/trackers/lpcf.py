@@ -1077,9 +1077,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         weighted = surface * self.lp_prior
         d_rho, d_theta, height = _surface_peak(weighted)
         # A strong peak that the prior shrank: a change too fast for the prior, or a look-alike (see _far_change).
-        # Not on a model alike at every angle, whose ridge peaks anywhere along it (see _TURN_UNSEEN).
+        # Not on a model alike at every angle, whose ridge peaks anywhere along it (see _TURN_UNSEEN), nor where
+        # this match is believed in full and the peak is not looked for.
         self._far_peak = None
-        if self._turn_seen:
+        if self._turn_seen and height < self.trust_high:
             raw_rho, raw_theta, raw_height = _surface_peak(surface)
             if raw_height >= self.trust_low and raw_height > _FAR_PEAK_RATIO * float(surface.flat[weighted.argmax()]):
                 self._far_peak = raw_rho, raw_theta

@@ -1643,7 +1643,8 @@ _FAR_PEAK_RATIO = 1.5
 #: now 0 / 1; 100 x 40 at 8 in 1, now 0). The real sequences' 13 starts, every frame / every third frame / from
 #: the box: 0.4978 / 0.3876 / 0.5976 -> 0.4973 / 0.3873 / 0.6025 (bag from the box 0.543 -> 0.579); over 4
 #: frames 0.5003 / 0.3872 / 0.5918, 5 frames 0.4982 / 0.3880, at least 2 degrees 0.4969 / 0.3893, 4 degrees
-#: 0.4987 / 0.3885: all within the 13 starts' noise.
+#: 0.4987 / 0.3885: all within the 13 starts' noise; over 2 frames 0.4960, every second frame 0.4527 against
+#: 0.4563.
 _STEADY_TURN_FRAMES, _STEADY_TURN_MIN = 3, 3.0
 #: Where the patch was further than ``_REFINE_HOPELESS`` times ``refine_max_distance`` from the subspace (a
 #: deforming object), the refinement is next tried ``_REFINE_RETRY`` frames later. Trying on every frame cost

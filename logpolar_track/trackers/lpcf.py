@@ -494,8 +494,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.block_visibility = self.lp_mask = None
         self._block_usual = self._block_spread = None
         self._lp_sample = None
-        #: The last log-polar match's strong peak beyond the motion prior, ``(d_rho, d_theta)`` bins, or None (see
-        #: _far_change).
+        #: The change of the last log-polar match's strong peak beyond the motion prior, ``(log_scale, degrees)``
+        #: (natural log of scale, counter-clockwise), or None (see _far_change).
         self._far_peak = None
         self._lp_references()
         self.velocity = np.zeros(2)  # pixels per frame
@@ -820,9 +820,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             far = self._far_peak
             if far is None:
                 continue
-            d_rho, d_theta = far
-            pose = Similarity(place.cx, place.cy, place.scale * math.exp(d_rho * self.grid.log_step),
-                              place.rotation_deg + d_theta * self.grid.degrees_per_bin, place.score)
+            log_scale, rotation = far
+            pose = Similarity(place.cx, place.cy, place.scale * math.exp(log_scale), place.rotation_deg + rotation,
+                              place.score)
             other, other_psr, other_peak = self._translate(frame, pose)
             turned, lp_height = self._scale_rotate(frame, other)
             if lp_height >= self.trust_high and lp_height > match[4]:
@@ -1095,7 +1095,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         if self._turn_seen and height < self.trust_high:
             raw_rho, raw_theta, raw_height = _surface_peak(surface)
             if raw_height >= self.trust_low and raw_height > _FAR_PEAK_RATIO * float(surface.flat[weighted.argmax()]):
-                self._far_peak = raw_rho, raw_theta
+                self._far_peak = raw_rho * self.grid.log_step, raw_theta * self.grid.degrees_per_bin
         # How far to believe the raw surface: a near-perfect match is a rigid change, not a deformation.
         trust = min(max((height - self.trust_low) / (self.trust_high - self.trust_low), 0.0), 1.0)
         if trust > 0.0:

@@ -32,7 +32,7 @@ from typing import IO, Callable, Iterable, Mapping, Sequence
 from .errors import LptrackError, RoiError, UsageError
 from .executor import TaskOutcome, run_tasks
 from .geometry import ROI_SYNTAX, Ellipse, parse_roi
-from .pipeline import CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, read_roi_sidecar, run_video
+from .pipeline import CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, read_roi_sidecar, read_roi_text, run_video
 from .results import FORMATS, header_line
 from .trackers import tracker_class
 from .video import (CODECS_BY_EXTENSION, announced_frame_count, check_fps, frames_to_track, make_output_folder,
@@ -254,7 +254,8 @@ def read_roi_file(path) -> list[RoiEntry]:
     ``cx,cy,a,b,angle`` (pixels; degrees counter-clockwise on screen) and may be quoted or not
     (``clip.mp4,"320,240,40",0,lpcf`` and ``clip.mp4,320,240,40,0,lpcf`` are the same). An optional header line,
     before the first entry (comments may come before it), starts with ``video``; blank lines and lines starting
-    with ``#`` are ignored. Relative video paths are relative to the ROI file's folder.
+    with ``#`` are ignored. Relative video paths are relative to the ROI file's folder. UTF-8 or UTF-16 text (see
+    :func:`~logpolar_track.pipeline.read_roi_text`).
 
     Raises
     ------
@@ -264,10 +265,7 @@ def read_roi_file(path) -> list[RoiEntry]:
         A line is malformed (the message gives its number), or lists a video twice.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise LptrackError(f"cannot read ROI file '{path}': {getattr(exc, 'strerror', None) or exc}") from None
+    text = read_roi_text(path)
     entries: list[RoiEntry] = []
     seen: dict[Path, int] = {}
     expected = f"video,roi[,start_frame][,tracker] with roi {ROI_SYNTAX}"

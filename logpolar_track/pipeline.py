@@ -7,6 +7,7 @@ CSV atomically, and returns a :class:`RunSummary`.
 
 from __future__ import annotations
 
+import codecs
 import math
 import sys
 import time
@@ -56,11 +57,33 @@ def roi_sidecar_paths(video_path) -> list[Path]:
     return [video_path.with_suffix(".roi"), video_path.with_name(video_path.name + ".roi")]
 
 
+def read_roi_text(path) -> str:
+    """The text of a ROI file (a sidecar or a ``--roi-file``): UTF-8, with or without a byte-order mark, or UTF-16
+    with one (what Windows PowerShell 5's ``echo 320,240,40 > clip.roi`` writes).
+
+    Raises
+    ------
+    LptrackError
+        The file cannot be read, or is not such text (exit code 1).
+    """
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise LptrackError(f"cannot read ROI file '{path}': {exc.strerror or exc}") from None
+    encoding = "utf-16" if data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE) else "utf-8-sig"
+    try:
+        return data.decode(encoding)
+    except UnicodeDecodeError:
+        raise LptrackError(f"cannot read ROI file '{path}': it is not text in UTF-8 (nor UTF-16 with a byte-order "
+                           f"mark); save it as UTF-8") from None
+
+
 def read_roi_sidecar(video_path) -> Ellipse | None:
     """The initial ROI stored next to a video, or None if there is no sidecar.
 
     The sidecar is ``<folder>/<stem>.roi`` (e.g. ``spin.roi`` for ``spin.mp4``) or ``<video file name>.roi``
-    (``spin.mp4.roi``): one line in ``--roi`` syntax, UTF-8 (a byte-order mark is allowed). ``#`` starts a
+    (``spin.mp4.roi``): one line in ``--roi`` syntax, UTF-8 or UTF-16 (see :func:`read_roi_text`). ``#`` starts a
     comment, to the end of its line; blank lines are ignored.
 
     Raises
@@ -75,10 +98,7 @@ def read_roi_sidecar(video_path) -> Ellipse | None:
     for candidate in roi_sidecar_paths(video_path):
         if not candidate.is_file():
             continue
-        try:
-            text = candidate.read_text(encoding="utf-8-sig")  # Windows editors may start it with a BOM
-        except (OSError, UnicodeDecodeError) as exc:
-            raise LptrackError(f"cannot read ROI file '{candidate}': {exc}") from None  # unreadable input: exit 1
+        text = read_roi_text(candidate)
         lines = [(n, ln.split("#", 1)[0].strip()) for n, ln in enumerate(text.splitlines(), start=1)]
         lines = [(n, ln) for n, ln in lines if ln]
         if not lines:

@@ -290,6 +290,10 @@ BAD = {
     "start-frame-past-end": (None, ["--start-frame", "99"], 2, ["past the end", "20 frames"]),
     "missing-output-folder": (None, ["--out", "missing/out.mp4"], 1, ["missing", "does not exist"]),
     "missing-csv-folder": (None, ["--csv", "missing/out.csv"], 1, ["missing", "does not exist"]),
+    # Over the file system's 255 bytes a name: pathlib raised it where a missing file gives False.
+    "video-name-too-long": (lambda d: d / ("v" * 300 + ".mp4"), ["--roi", "1,2,3"], 1,
+                            ["cannot use the name 'vvvv", "vvv.mp4': it has 304 bytes", "at most 255"]),
+    "csv-name-too-long": (None, ["--csv", "c" * 300 + ".csv"], 1, ["the name 'cccc", "304 bytes"]),
     "output-folder-is-a-file": (None, ["--csv", "{video}/out.csv"], 1, ["not a folder"]),
     "out-dir-is-a-file": (None, ["--out-dir", "{video}"], 1, ["tiny.mp4' is a file, not a folder"]),
     "out-dir-below-a-file": (None, ["--out-dir", "{video}/sub"], 1, ["tiny.mp4' is a file, not a folder"]),
@@ -664,7 +668,7 @@ def test_roi_sidecar_comments_and_ambiguities(tmp_path):
     (tmp_path / "clip.roi").write_text("# nothing yet\n")
     with pytest.raises(RoiError, match="clip.roi' is empty"):
         read_roi_sidecar(video)
-    (tmp_path / "clip.roi").write_bytes(b"\xff\xfe\x00garbage")  # unreadable input (exit 1), not a bad ROI (2)
+    (tmp_path / "clip.roi").write_bytes(b"\xc3\x28garbage")  # unreadable input (exit 1), not a bad ROI (2)
     with pytest.raises(LptrackError, match="cannot read ROI file") as info:
         read_roi_sidecar(video)
     assert info.value.exit_code == 1
@@ -790,6 +794,30 @@ def test_a_roi_sidecar_saved_with_a_byte_order_mark_is_read(tiny_video, workdir)
     result = invoke(tiny_video.path, "--no-video", "--csv", "-", "--frames", "2")
     assert result.exit_code == 0, result.stderr
     assert read_rows(result.stdout)[0]["cx"] == "80.000"
+
+
+@pytest.mark.parametrize("encoding", ["utf-16-le", "utf-16-be"])
+def test_roi_files_saved_as_utf16_are_read(tiny_video, workdir, encoding):
+    """Windows PowerShell 5's ``echo 80,60,20 > tiny.roi`` writes UTF-16 with a byte-order mark: a sidecar and a
+    --roi-file so saved are read as UTF-8 ones are (the codec's own message was shown)."""
+    tiny_video.path.with_suffix(".roi").write_bytes(("\ufeff80,60,20\r\n").encode(encoding))
+    result = invoke(tiny_video.path, "--no-video", "--csv", "-", "--frames", "2")
+    assert result.exit_code == 0, result.stderr
+    assert read_rows(result.stdout)[0]["cx"] == "80.000"
+    tiny_video.path.with_suffix(".roi").unlink()
+    roi_file = workdir / "rois.csv"
+    roi_file.write_bytes(f"\ufeff{tiny_video.path},70,50,20\r\n".encode(encoding))
+    result = invoke("--roi-file", roi_file, "--no-video", "--csv", "-", "--frames", "2")
+    assert result.exit_code == 0, result.stderr
+    assert read_rows(result.stdout)[0]["cx"] == "70.000"
+
+
+def test_a_roi_file_that_is_not_text_is_one_line(tiny_video, workdir):
+    tiny_video.path.with_suffix(".roi").write_bytes(b"\xc3\x28\x00\x01")
+    result = invoke(tiny_video.path, "--no-video", "--csv", "-", "--frames", "2")
+    assert result.exit_code == 1
+    assert result.stderr == (f"lptrack: error: cannot read ROI file '{tiny_video.path.with_suffix('.roi')}': it is "
+                             f"not text in UTF-8 (nor UTF-16 with a byte-order mark); save it as UTF-8\n")
 
 
 def test_a_video_written_under_another_name_is_said_under_quiet_too(tiny_video, workdir):

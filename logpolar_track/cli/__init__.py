@@ -9,6 +9,7 @@ on stderr and an exit code: 0 success (lost frames are data), 1 runtime failure,
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import signal
 import sys
@@ -105,6 +106,23 @@ class LptrackGroup(click.Group):
                 raise
             click.echo(f"lptrack: error: {exc}", err=True)
             ctx.exit(exc.exit_code)
+        except OSError as exc:
+            # A path the system refuses before lptrack can judge it: pathlib's is_dir() and exists() raise for a
+            # name over the file system's limit, where they return False for a missing file. Other OS errors are
+            # caught and reported by the library, naming what failed.
+            if exc.errno != errno.ENAMETOOLONG or os.environ.get("LPTRACK_DEBUG"):
+                raise
+            path = os.fsdecode(exc.filename) if exc.filename is not None else ""
+            longest = max(path.split(os.sep), key=lambda part: len(os.fsencode(part)))
+            size = len(os.fsencode(longest))
+            if size > 255:
+                shown = longest if len(longest) <= 60 else f"{longest[:30]}...{longest[-20:]}"
+                click.echo(f"lptrack: error: cannot use the name '{shown}': it has {size} bytes; file systems allow "
+                           f"at most 255 a name", err=True)
+            else:
+                click.echo(f"lptrack: error: cannot use '{path[:60]}...': {exc.strerror} "
+                           f"({len(os.fsencode(path))} bytes; file systems allow paths of at most 4096)", err=True)
+            ctx.exit(EXIT_FAILURE)
         except MemoryError:  # NumPy's allocation failures too; outputs were removed as on any failure
             if os.environ.get("LPTRACK_DEBUG"):
                 raise

@@ -890,6 +890,31 @@ def test_a_roi_drawn_inside_a_finely_textured_disc_is_not_taken_for_a_plain_obje
     assert np.max(centre_errors(results, poses[1:])) < 0.1 * radius
 
 
+def test_a_wheel_with_one_mark_turning_steadily_is_followed_without_slipping():
+    """A plain disc with one radial stripe (a wheel with a mark, a user's report) turning 3 degrees a frame: the
+    filter's centre, pulled towards the stripe, made the log-polar match read the turn backwards, the refinement's
+    bound (3 degrees) cut its correction short, and the wheel fell 10-20 degrees behind for good (36 degrees after
+    1500 frames). Now the refinement may correct 6 degrees and the steady turn is predicted: within 1.5 degrees
+    on every frame (measured 0.27; 11.6 before)."""
+    rng = np.random.default_rng(0)
+    background = (rng.random((480, 640, 3)) * 80).astype(np.uint8)
+    tracker = create_tracker("lpcf")
+    errors = []
+    for i in range(120):
+        frame = background.copy()
+        cv2.circle(frame, (320 * 16, 240 * 16), 60 * 16, (200, 50, 50), -1, cv2.LINE_AA, 4)
+        t = math.radians(3.0 * i)
+        end = (round((320 + 58 * math.cos(t)) * 16), round((240 - 58 * math.sin(t)) * 16))
+        cv2.line(frame, (320 * 16, 240 * 16), end, (255, 255, 255), 10, cv2.LINE_AA, 4)
+        if i == 0:
+            tracker.init(frame, Ellipse.circle(320, 240, 60))
+            continue
+        ok, state = tracker.update(frame)
+        assert ok
+        errors.append(state.rotation_deg - 3.0 * i)
+    assert np.max(np.abs(errors)) < 1.5
+
+
 def _plain_disc(frames_total: int = 60, growth: float = 1.5, noise: float = 0.0, seed: int = 0):
     """A plain disc (one colour, anti-aliased) on a plain background, moving 3 px a frame to the right and up and
     down, its radius growing from 40 px by ``growth`` times: frames and true poses (scale against the first)."""

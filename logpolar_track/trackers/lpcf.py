@@ -1631,9 +1631,17 @@ class LogPolarCorrelationTracker(SimilarityTracker):
 
 
 #: Gradient refinement (see ``_refine``): the appearance patch covers the ROI's ellipse enlarged this much, and
-#: the refinement may move the estimate at most this far from the log-polar/filter estimate.
+#: the refinement may move the estimate at most this far from the log-polar/filter estimate. The angle's bound
+#: was 3 degrees: a plain disc with one radial stripe (a wheel with a mark) turning 3 degrees a frame pulled the
+#: filter's centre 1 px towards the stripe, the log-polar match there read the turn backwards (-1.1 degrees: a
+#: mark through the centre makes that match as sensitive to the centre as to the angle), and the refinement, whose
+#: first step pointed the right way (4.5 degrees, and the centre back), was cut short; the turn was read as 0 and
+#: the wheel fell 10-20 degrees behind, for good (a user's report: 36 degrees short after 1500 frames). At 6 (with
+#: the steady turn below) it is followed to within a degree over 1500 frames; the real sequences' 13 starts
+#: 0.4973 -> 0.4986 with this bound alone (boat1 0.659 -> 0.670), from the box 0.6025 -> 0.6009; at 10, 0.4997
+#: (with the steady turn below).
 _REFINE_EXTENT = 1.0
-_REFINE_MAX_SAMPLES, _REFINE_MAX_LOG_SCALE, _REFINE_MAX_DEGREES = 1.5, 0.05, 3.0
+_REFINE_MAX_SAMPLES, _REFINE_MAX_LOG_SCALE, _REFINE_MAX_DEGREES = 1.5, 0.05, 6.0
 #: Least smaller semi-axis of the ROI, in samples, that the refinement runs on.
 _REFINE_MIN_SEMI_AXIS = 4.0
 #: A change of scale (natural log) or angle (degrees) measured by the first log-polar match beyond which a second
@@ -1656,8 +1664,14 @@ _FAR_PEAK_RATIO = 1.5
 #: the box: 0.4978 / 0.3876 / 0.5976 -> 0.4973 / 0.3873 / 0.6025 (bag from the box 0.543 -> 0.579); over 4
 #: frames 0.5003 / 0.3872 / 0.5918, 5 frames 0.4982 / 0.3880, at least 2 degrees 0.4969 / 0.3893, 4 degrees
 #: 0.4987 / 0.3885: all within the 13 starts' noise; over 2 frames 0.4960, every second frame 0.4527 against
-#: 0.4563.
-_STEADY_TURN_FRAMES, _STEADY_TURN_MIN = 3, 3.0
+#: 0.4563. Then 3 frames of 3 degrees; now 4 frames of 2 degrees, so that a wheel turning 3 degrees a frame, whose
+#: measured turns scatter from 2.2 to 3.5, is predicted (over 1500 frames it slipped by 10 degrees twice without the
+#: prediction, with the refinement's bound above at 6 degrees; with it, within a degree throughout). The 80 x 30 px
+#: ellipses at 8 degrees a frame: lost in 0 of 4 seeds (at 12, 3 of 4 still are). Real sequences, with the bound at
+#: 6, every frame / every second / every third frame / from the box: 0.4973 / 0.4563 / 0.3873 / 0.6025 -> 0.5011 /
+#: 0.4537 / 0.3980 / 0.5916 (from the box bag 0.579 -> 0.543, toy 0.763 -> 0.707, freeman1 0.454 -> 0.481); 3
+#: frames of 2 degrees: 0.5001 / 0.4564 / 0.3974 / 0.5851.
+_STEADY_TURN_FRAMES, _STEADY_TURN_MIN = 4, 2.0
 #: Where the patch was further than ``_REFINE_HOPELESS`` times ``refine_max_distance`` from the subspace (a
 #: deforming object), the refinement is next tried ``_REFINE_RETRY`` frames later. Trying on every frame cost
 #: 17 % of lpcf's frame rate on the 7 real sequences (crossing, human3, freeman1: up to 25 %), for a 10-start

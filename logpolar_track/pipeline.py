@@ -113,7 +113,8 @@ def read_roi_sidecar(video_path) -> Ellipse | None:
     if len(found) == 2 and found[0][1] != found[1][1]:
         (first, a), (second, b) = found
         raise RoiError(f"ROI files '{first}' ({a.to_spec()}) and '{second}' ({b.to_spec()}) disagree; keep one, "
-                       f"or give --roi")
+                       f"or give --roi ('{first.name}' serves every video named '{first.stem}.*': to keep it to "
+                       f"one, name it after that video's file name, as '{second.name}' is)")
     return found[0][1] if found else None
 
 

@@ -330,7 +330,9 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
         if str(video_out) == "-":
             raise UsageError("the annotated video cannot go to stdout ('-o -'); give it a file name, or use "
                              "--no-video (the rows go to stdout with --csv -)")
-        if writes_in_place(video_out):  # the video is renamed into place: it cannot go to a device or pipe
+        if writes_in_place(video_out) or Path(video_out).is_dir():
+            # A device or pipe: the video is renamed into place, so it cannot go there; a folder: said as such
+            # rather than as a missing extension, as for the CSV.
             check_output_path(video_out, what="output video")
         if Path(video_out).suffix.lower() not in CODECS_BY_EXTENSION:
             raise UsageError(f"cannot write video '{video_out}': unsupported extension "

@@ -295,6 +295,9 @@ BAD = {
                             ["cannot use the name 'vvvv", "vvv.mp4': it has 304 bytes", "at most 255"]),
     "csv-name-too-long": (None, ["--csv", "c" * 300 + ".csv"], 1, ["the name 'cccc", "304 bytes"]),
     "output-folder-is-a-file": (None, ["--csv", "{video}/out.csv"], 1, ["not a folder"]),
+    # A folder for -o is said as for --csv (it was click's "is a directory", exit 2).
+    "out-is-a-folder": (None, ["--out", "."], 1, ["cannot write output video '.': it is a folder"]),
+    "csv-is-a-folder": (None, ["--csv", "."], 1, ["cannot write output CSV '.': it is a folder"]),
     "out-dir-is-a-file": (None, ["--out-dir", "{video}"], 1, ["tiny.mp4' is a file, not a folder"]),
     "out-dir-below-a-file": (None, ["--out-dir", "{video}/sub"], 1, ["tiny.mp4' is a file, not a folder"]),
     "csv-is-the-roi-file": (None, ["--csv", "{roi}", "--no-video", "--overwrite"], 1,

@@ -144,7 +144,7 @@ Examples:
 @click.option("--fps", type=FrameRate(), default=None, metavar="RATE",
               help="Frames per second of the input, for time_s and the annotated video, as FFmpeg's -framerate: "
                    "an image sequence's (it has none: 25 is assumed), or instead of a video's own.")
-@click.option("--out", "-o", "video_out", type=click.Path(dir_okay=False, path_type=Path), metavar="VIDEO_OUT",
+@click.option("--out", "-o", "video_out", type=click.Path(path_type=Path), metavar="VIDEO_OUT",
               help=f"Annotated video to write (one input only). Default: <video stem>{VIDEO_OUT_SUFFIX}. "
                    f"Extension .mp4/.m4v/.mov (mp4v), .avi (MJPG), .mkv or .webm; falls back to MJPG .avi.")
 @click.option("--csv", "csv_out", metavar="CSV_OUT",

@@ -58,6 +58,8 @@ class AppearanceSubspace:
     ----------
     basis : ndarray, shape (h w, k)
         Orthonormal basis of the subspace, float32, in weighted coordinates (k <= n_components + 3).
+    anchor_basis : ndarray, shape (h w, k)
+        The same for the constant and the first frame's patch alone (k <= 2): the part that cannot drift.
     u, v : ndarray, shape (h w,)
         Offsets of the samples from the patch's centre, in samples (see the module's conventions).
     """
@@ -82,7 +84,7 @@ class AppearanceSubspace:
         self._first = self._normalised(first)
         self._recent: list[np.ndarray] = []
         self._added = 0
-        self.basis = self._orthonormal([self._constant, self._first])
+        self.basis = self.anchor_basis = self._orthonormal([self._constant, self._first])
 
     def add(self, patch: np.ndarray) -> None:
         """Add a patch ``(h, w)`` of the object (grey levels) to the recent ones."""
@@ -152,8 +154,8 @@ class AppearanceSubspace:
         return np.ascontiguousarray(q[:, keep], dtype=np.float32)
 
 
-def similarity_step(patch: np.ndarray, subspace: AppearanceSubspace, damping: float = 1e-3
-                    ) -> tuple[np.ndarray, float]:
+def similarity_step(patch: np.ndarray, subspace: AppearanceSubspace, damping: float = 1e-3,
+                    anchor_below: float = 0.0) -> tuple[np.ndarray, float]:
     """One Gauss-Newton step towards the appearance subspace, and the patch's distance from it before the step.
 
     Parameters
@@ -164,6 +166,13 @@ def similarity_step(patch: np.ndarray, subspace: AppearanceSubspace, damping: fl
         The appearance model, with the sample weights.
     damping : float
         Levenberg-Marquardt damping, relative to the mean of the normal matrix's diagonal.
+    anchor_below : float
+        Where the patch is within this distance (as :meth:`AppearanceSubspace.distance`) of the span of the first
+        frame's patch and the constant alone, the step goes towards that span instead (0: never). The recent
+        patches in the subspace were sampled at the tracker's own, slightly wrong, poses; for a rigid object their
+        mean and components explain part of a misalignment, which the step then does not correct, and the
+        estimate drifts (the template update problem: Matthews, Ishikawa and Baker, PAMI 2004). An object that
+        still looks as it did on the first frame is aligned to that frame, which cannot drift.
 
     Returns
     -------
@@ -171,7 +180,7 @@ def similarity_step(patch: np.ndarray, subspace: AppearanceSubspace, damping: fl
         ``(du, dv, d_log_scale, d_angle)``: samples, samples, natural log, radians (counter-clockwise on
         screen).
     distance : float
-        :meth:`AppearanceSubspace.distance` of the patch, at the current estimate.
+        :meth:`AppearanceSubspace.distance` of the patch, at the current estimate (from the whole subspace).
     """
     prepared = subspace.prepared(patch)
     jacobian = _motion_jacobian(prepared, subspace)
@@ -180,11 +189,17 @@ def similarity_step(patch: np.ndarray, subspace: AppearanceSubspace, damping: fl
     # Project the error and the Jacobian out of the subspace: appearance it explains is not motion. With J' the
     # projected Jacobian, J'^T J' = J^T J - (B^T J)^T (B^T J) and J'^T e' = J^T e' for the projected error e'.
     error = x - basis @ (basis.T @ x)
+    distance = subspace._distance(x, error)
+    if anchor_below > 0:
+        anchor = subspace.anchor_basis
+        anchor_error = x - anchor @ (anchor.T @ x)
+        if subspace._distance(x, anchor_error) < anchor_below:
+            basis, error = anchor, anchor_error
     in_basis = basis.T @ jacobian
     normal = (jacobian.T @ jacobian - in_basis.T @ in_basis).astype(np.float64)
     normal.flat[::5] += damping * float(np.trace(normal)) / 4 + 1e-9
     _, step = cv2.solve(normal, -(jacobian.T @ error[:, None]).astype(np.float64), flags=cv2.DECOMP_CHOLESKY)
-    return step.ravel(), subspace._distance(x, error)
+    return step.ravel(), distance
 
 
 def _motion_jacobian(prepared: np.ndarray, subspace: AppearanceSubspace) -> np.ndarray:

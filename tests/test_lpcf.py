@@ -915,6 +915,30 @@ def test_a_wheel_with_one_mark_turning_steadily_is_followed_without_slipping():
     assert np.max(np.abs(errors)) < 1.5
 
 
+def test_a_plain_disc_with_one_dot_does_not_drift():
+    """A plain disc with one dot 40 px from its centre, turning 1 degree a frame (a turntable with a mark): the
+    recent patches of the refinement's subspace, sampled at slightly wrong poses, explained the misalignment, and the
+    estimate drifted while tracked at a high score (centre 3.8 px off, turn 5.1 degrees behind after 120 frames).
+    Where the patch still looks as on the first frame the refinement aligns to that frame: within 2.5 px throughout
+    and 1 degree at the end (measured 1.2 px, 0.1 degrees)."""
+    rng = np.random.default_rng(0)
+    background = (rng.random((480, 640, 3)) * 80).astype(np.uint8)
+    tracker = create_tracker("lpcf")
+    for i in range(120):
+        frame = background.copy()
+        cv2.circle(frame, (320 * 16, 240 * 16), 60 * 16, (200, 50, 50), -1, cv2.LINE_AA, 4)
+        t = math.radians(1.0 * i)
+        dot = (round((320 + 40 * math.cos(t)) * 16), round((240 - 40 * math.sin(t)) * 16))
+        cv2.circle(frame, dot, 6 * 16, (255, 255, 255), -1, cv2.LINE_AA, 4)
+        if i == 0:
+            tracker.init(frame, Ellipse.circle(320, 240, 60))
+            continue
+        ok, state = tracker.update(frame)
+        assert ok
+        assert math.hypot(state.centre[0] - 320, state.centre[1] - 240) < 2.5
+    assert abs(state.rotation_deg - 119.0) < 1.0
+
+
 def _plain_disc(frames_total: int = 60, growth: float = 1.5, noise: float = 0.0, seed: int = 0):
     """A plain disc (one colour, anti-aliased) on a plain background, moving 3 px a frame to the right and up and
     down, its radius growing from 40 px by ``growth`` times: frames and true poses (scale against the first)."""

@@ -475,6 +475,21 @@ class VideoReader:
                 return True
         return False
 
+    def _join_decoder(self) -> None:
+        # A stop signal (Ctrl-C, SIGTERM) can land while Thread.start() waits for the new thread to say it runs:
+        # start() is then left by the exception, the thread runs all the same, and join() refuses ("cannot join
+        # thread before it is started") until it has said so, a moment later. Seen once in CI, as a traceback
+        # and exit 1 instead of 143.
+        deadline = time.monotonic() + 5.0
+        while True:
+            try:
+                self._thread.join()
+                return
+            except RuntimeError:
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.001)
+
     def close(self) -> None:
         """Stop the decoding thread and release the file. Safe to call more than once."""
         if self._closed:
@@ -485,7 +500,7 @@ class VideoReader:
         if self._thread is None:
             self._cap.release()
         else:
-            self._thread.join()  # the thread releases the capture
+            self._join_decoder()  # the thread releases the capture
         # Drop frames still queued so their memory is freed now.
         while True:
             try:

@@ -86,6 +86,30 @@ def test_close_interrupted_while_waiting_still_releases_the_file(tiny_video, mon
     assert not reader._cap.isOpened()
 
 
+def test_close_after_a_signal_in_thread_start_waits_for_the_thread(tiny_video, monkeypatch):
+    """A stop signal landing while Thread.start() waits for the new thread to say it runs leaves start() by the
+    exception; close() then met "cannot join thread before it is started" (a traceback and exit 1 instead of 143,
+    seen once in CI). It now waits for the thread, which runs all the same, and joins it."""
+    reader = VideoReader(tiny_video.path, read_ahead=2)
+    frames = iter(reader)
+    next(frames), next(frames)
+    thread = reader._thread
+    join = threading.Thread.join
+    refusals = []
+
+    def join_not_yet_started(self, timeout=None):
+        if len(refusals) < 3:
+            refusals.append(1)
+            raise RuntimeError("cannot join thread before it is started")
+        return join(self, timeout)
+
+    monkeypatch.setattr(threading.Thread, "join", join_not_yet_started)
+    reader.close()
+    assert len(refusals) == 3
+    assert not thread.is_alive()
+    assert not reader._cap.isOpened()
+
+
 @pytest.mark.parametrize("read_ahead", [1, 2])
 def test_reader_decodes_at_most_read_ahead_frames_ahead_and_keeps_none(tiny_video, read_ahead):
     """Memory is bounded by the frames alive at once (25 MB each at 4K): the one the caller holds and at most

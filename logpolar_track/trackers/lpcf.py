@@ -806,7 +806,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         The prior makes a turn of 30 degrees in one frame 90 times less likely than none, so an object turning that
         fast was never followed, however clear its match there: a textured disc of radius 30-60 px turning 30-45
         degrees a frame from the first frame was lost on 24 of 24 runs (radius 30, 45 and 60 px, 4 seeds each; now
-        none, and 9 of 12 at 60 degrees a frame, 6 of 12 at 90). A large turn also throws the filter's
+        none, and 10 of 12 at 60 degrees a frame, 6 of 12 at 90: measured again after the steady turn and the
+        refinement's bound of 2026-12-06). A large turn also throws the filter's
         centre off (8 px on a disc of radius 60 px turned 30 degrees), and the log-polar match falls fast with the
         centre's error (radius 30 px: raw peak 0.92 at the centre, 0.56 at 2 px, 0.30 at 3 px), hence the second
         place and the match again from the pose found. Only a verified pose is taken: taken at a raw peak of 0.4,

@@ -77,3 +77,22 @@ def patch_features(gray: np.ndarray, n_orient: int = 6, window: np.ndarray | Non
     np.multiply(gray - np.float32(mean[0, 0]), weight / np.float32(std[0, 0] + 1e-3), out=out[0])
     np.multiply(channels.transpose(2, 0, 1), weight / norm, out=out[1:])
     return out
+
+
+def locally_normalised(features: np.ndarray, sigma: float, floor: float = 0.2) -> np.ndarray:
+    """:func:`patch_features` of a large map ``(1 + n_orient, H, W)`` normalised to their neighbourhood, float32.
+
+    The grey channel is centred on its local mean and divided by its local spread, the gradient channels are
+    divided by the local mean of their sum (the gradient magnitude), both within a Gaussian of ``sigma`` samples,
+    so that a part of the map in shade (or in a spotlight) has the contrast of the rest. ``floor``, a fraction of
+    the map's mean spread and magnitude, is added to the divisors so that flat areas are not raised to noise.
+    """
+    if sigma <= 0 or floor < 0:
+        raise ValueError(f"need sigma > 0 and floor >= 0, got {sigma} and {floor}")
+    out = np.empty_like(features)
+    grey = features[0] - cv2.GaussianBlur(features[0], (0, 0), sigma)
+    spread = np.sqrt(cv2.GaussianBlur(grey * grey, (0, 0), sigma))
+    np.divide(grey, spread + np.float32(floor * float(spread.mean()) + 1e-6), out=out[0])
+    magnitude = cv2.GaussianBlur(features[1:].sum(axis=0), (0, 0), sigma)
+    np.divide(features[1:], magnitude + np.float32(floor * float(magnitude.mean()) + 1e-6), out=out[1:])
+    return out

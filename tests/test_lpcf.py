@@ -512,8 +512,54 @@ def test_whole_frame_search_points_at_the_object(size, radius, place):
     truth = np.array([width * place[0], height * place[1]])
     frame = render_frame(background, texture, roi, Pose(float(truth[0]), float(truth[1]), 1.0, 10.0))
     pose = Similarity(0.0, 0.0, 1.0, 10.0, 0.0)
-    best = min(np.hypot(*(tracker._frame_candidates(frame, pose, 1)[0] - truth)) for _ in range(16))
+    best = min(np.hypot(*(tracker._frame_candidates(frame, pose, 1)[0][0] - truth)) for _ in range(16))
     assert best <= 6.0
+
+
+def _in_shade(frame, edge_x, gain=0.3, soft=4.0):
+    """``frame`` (uint8 BGR) with the part right of ``edge_x`` (pixels) darkened ``gain`` times, over a
+    ``soft``-pixel edge: a building's hard shade."""
+    ramp = np.clip((np.arange(frame.shape[1], dtype=np.float32) - edge_x) / soft + 0.5, 0.0, 1.0)
+    return np.clip(frame * (1.0 - (1.0 - gain) * ramp)[None, :, None], 0, 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize("seed", [0, 2, 5])
+def test_whole_frame_search_points_at_an_object_in_shade(seed):
+    """The object, learnt in the light, is in shade (x0.3) on the frame's right side: the strongest places of the
+    search's map are on lit background (measured 181-329 px off on 7 of 8 seeds), and the places of the map
+    normalised to local lighting include the object's (within 1.1 px on those 7; seed 3 is missed by both)."""
+    rng = np.random.default_rng(seed)
+    background, texture = random_texture(480, 640, rng), random_texture(101, 101, rng)
+    roi = Ellipse(200, 240, 25, 20, 20)
+    tracker = create_tracker("lpcf")
+    tracker.init(render_frame(background, texture, roi, Pose(roi.cx, roi.cy, 1.0, 0.0)), roi)
+    truth = np.array([500.0, 300.0])
+    frame = _in_shade(render_frame(background, texture, roi, Pose(500.0, 300.0, 1.0, 0.0)), 320)
+    pose = Similarity(0.0, 0.0, 1.0, 0.0, 0.0)
+    places, relit = tracker._frame_candidates(frame, pose, 2, local_light=True)
+    assert np.min(np.hypot(*(places[relit] - truth).T)) <= 3.0
+
+
+@pytest.mark.parametrize("seed", [1, 3, 7])
+def test_an_object_walking_into_hard_shade_is_found_there(seed):
+    """A disc (radius 30 px) walks 3.8 px a frame from the light into a building's shade (x0.3, a 4 px edge) and
+    on: wherever wholly in the shade (beyond two radii from the edge), it is reported tracked within a quarter
+    radius, and no frame is reported tracked more than a radius off. Over seeds 0-11: found there in 10 runs
+    (4 before the searches looked at the map normalised to local lighting); seed 0 stays on the shadow's edge,
+    reported tracked at 0.33-0.36, seed 2 is not found. Seeds 1, 3 and 7 failed before."""
+    radius = 30
+    rng = np.random.default_rng(seed)
+    background, texture = random_texture(480, 640, rng), random_texture(4 * radius + 1, 4 * radius + 1, rng)
+    poses = [Pose(120 + 3.8 * i, 240 + 10 * math.sin(i / 12), 1.0, 0.2 * i) for i in range(110)]
+    roi = Ellipse.circle(poses[0].cx, poses[0].cy, radius)
+    frames = [_in_shade(render_frame(background, texture, roi, pose), 320) for pose in poses]
+    _, results = run(frames, roi)
+    errors = centre_errors(results, poses[1:])
+    tracked = np.array([ok for ok, _ in results])
+    in_shade = np.array([pose.cx - radius > 320 + 2 * radius for pose in poses[1:]])
+    assert in_shade.sum() >= 30
+    assert np.all(tracked[in_shade] & (errors[in_shade] < radius / 4))
+    assert not np.any(tracked & (errors > radius))
 
 
 @pytest.mark.parametrize("size, radius, velocity, seed", [((320, 240), 30, (6, 0), 4), ((640, 360), 40, (-10, 0), 8),
@@ -608,9 +654,9 @@ def test_a_search_in_parts_covers_each_pose_part_by_part_in_turn(monkeypatch):
     searched = []  # (turn from the last tracked angle in degrees, size factor, part, parts) per search
     frame_candidates = lpcf.LogPolarCorrelationTracker._frame_candidates
 
-    def spy(self, frame, pose, count, long_term=False):
+    def spy(self, frame, pose, count, long_term=False, local_light=False):
         part = self._search_part
-        centres = frame_candidates(self, frame, pose, count, long_term)
+        centres = frame_candidates(self, frame, pose, count, long_term, local_light)
         if not long_term:
             last = self._last_good
             searched.append((round(pose.rotation_deg - last.rotation_deg, 6), round(pose.scale / last.scale, 6),

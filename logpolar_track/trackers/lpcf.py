@@ -1780,7 +1780,8 @@ _SEARCH_EVERY, _SEARCH_PART, _SEARCH_CANDIDATES = 3, 512, 2
 #: 0.5948. Fraction 0.25 / 0.1: shade 283 / 313, dappled 189 / 169; floor 0.4: 263, 169, 378. The normalised map
 #: alone (not beside the plain one): the shadows the same, the real sequences 0.4999 (human3 0.524 -> 0.496). Cost,
 #: only while searching: on the real sequences 0.176 maps and 2.50 patches a frame against 0.116 and 2.44, some
-#: 0.1 ms a frame (5 %); the speed benchmark's disc never searches.
+#: 0.1 ms a frame (5 %); the speed benchmark's disc never searches. The price: a copy of the object in shade is now
+#: taken, as a copy in the light always was (a helper's review: docs/lpcf.md, "Shadows: the searches see the shade").
 _LOCAL_LIGHT_SIGMA, _LOCAL_LIGHT_FLOOR = 0.15, 0.2
 #: In the long-term search a place from the normalised map must answer this many times as sharply (PSR) as the best
 #: so far: more places tried are more chances of a look-alike. At 1 (as the plain map's), lpcf-masked from freeman1's

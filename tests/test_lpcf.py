@@ -562,6 +562,36 @@ def test_an_object_walking_into_hard_shade_is_found_there(seed):
     assert not np.any(tracked & (errors > radius))
 
 
+@pytest.mark.parametrize("seed", [7])
+def test_an_object_covered_for_good_in_dappled_shade_is_not_tracked_on_background(seed):
+    """Blotchy shade (x0.3) over about half of a 640x480 frame, the object (radius 35 px) in a lit patch, covered
+    for good from frame 25 by a textured board: no frame after is reported tracked. Seeds 0-11: 7 without the
+    searches' map normalised to local lighting; 5 with it while its places were asked for no more than the plain
+    map's (seeds 0 and 7 settled on background); 6 now (``_RELIT_MATCH_GAIN``; seed 0 still does). The other 5
+    fail with or without it."""
+    radius, rng = 35, np.random.default_rng(seed)
+    background, texture = random_texture(480, 640, rng), random_texture(4 * radius + 1, 4 * radius + 1, rng)
+    board = random_texture(480, 640, np.random.default_rng(seed + 1000))
+    blobs = cv2.GaussianBlur(np.random.default_rng(seed + 3000).standard_normal((480, 640)).astype(np.float32),
+                             (0, 0), 30)
+    light = 1 - 0.7 * np.clip((blobs - np.median(blobs)) / (0.1 * blobs.std()) + 0.5, 0, 1)
+    light[200:280, 360:500] = 1.0
+    light = cv2.GaussianBlur(light, (0, 0), 2)[..., None]
+    poses = [Pose(430 + 0.4 * i, 240.0, 1.0, 0.3 * i) for i in range(130)]
+    roi = Ellipse.circle(430, 240, radius)
+    noise = np.random.default_rng(seed + 5000)
+    frames = []
+    for i, pose in enumerate(poses):
+        frame = render_frame(background, texture, roi, pose).astype(np.float32)
+        if i >= 25:
+            top, left = int(240 - 1.6 * radius), int(430 - 1.6 * radius)
+            frame[top:int(240 + 1.6 * radius), left:int(430 + 1.6 * radius + 70)] = \
+                board[top:int(240 + 1.6 * radius), left:int(430 + 1.6 * radius + 70)]
+        frames.append(np.clip(frame * light + noise.normal(0, 2.0, frame.shape), 0, 255).astype(np.uint8))
+    _, results = run(frames, roi)
+    assert not any(ok for ok, _ in results[30:])
+
+
 @pytest.mark.parametrize("size, radius, velocity, seed", [((320, 240), 30, (6, 0), 4), ((640, 360), 40, (-10, 0), 8),
                                                          ((320, 240), 30, (6, 0), 10), ((640, 480), 25, (0, 8), 9)])
 def test_an_object_gone_for_good_is_not_tracked_on_background(size, radius, velocity, seed):

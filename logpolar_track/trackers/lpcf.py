@@ -113,7 +113,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
     patch_samples : int
         Samples along the patch's longer side (the patch is resampled to this resolution).
     learning_rate : float
-        Running-average weight of a confident frame in the filter (0 to 1).
+        Running-average weight of a confident frame in the filter (0 to 1); a fast object's frames weigh more
+        (see ``_DISTANCE_LEARNING_SPEED``), as do the other models'.
     label_sigma : float
         Width of the filter's Gaussian target response, as a fraction of the object's size (the geometric
         mean of its box's sides). 1/16, as in DSST (Danelljan et al., BMVC 2014): the 7 real sequences'

@@ -1344,7 +1344,7 @@ def test_learning_counts_distance_from_a_speed_on():
     assert learning_frames_for_speed(0.0) == learning_frames_for_speed(_DISTANCE_LEARNING_SPEED) == 1.0
     assert learning_frames_for_speed(2 * _DISTANCE_LEARNING_SPEED) == pytest.approx(2.0)
     assert learning_frames_for_speed(100.0) == _DISTANCE_LEARNING_MAX
-    # Measured on a track: a disc moving 14 px a frame, 0.23 of its 60 px size, learns as if about twice as often.
+    # Measured on a track: for a disc moving 14 px a frame, 0.23 of its 60 px size, a learning step counts twice.
     roi, poses, frames = _changing_as_it_travels(4, 14.0, frames_total=20)
     tracker, _ = run(frames, roi)
     assert tracker._learning_frames() == pytest.approx(

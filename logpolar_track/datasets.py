@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Iterator
 
@@ -96,6 +96,26 @@ class Sequence:
             yield from _image_frames(self.frame_files, self.fps)
         else:
             yield from _video_frames(self.path)
+
+    def backwards(self) -> "Sequence":
+        """This sequence played backwards, named ``<name>-backwards``: its frames from the last to the first, the
+        ground truth reversed with them (:meth:`~logpolar_track.evaluate.GroundTruth.reversed`), started on the
+        last frame with ground truth from the ellipse inscribed in its box.
+
+        The same footage poses other tracking problems this way (an object grows where it shrank, arrives where it
+        left, passes an occluder from the other side): a check on sequences a tracker was not tuned on.
+
+        Raises
+        ------
+        UsageError
+            For a video: only image sequences are played backwards (a video would have to be decoded whole).
+        """
+        if self.frame_files is None:
+            raise UsageError(f"'{self.name}' is a video ({self.path.name}); only image sequences (OTB, VOT, UAV123 "
+                             "folders) can be played backwards")
+        gt = self.gt.truncated(len(self.frame_files)).reversed()
+        return replace(self, name=f"{self.name}-backwards", gt=gt, roi=gt.initial_roi(), start=gt.first_valid,
+                       frame_files=self.frame_files[::-1])
 
     def describe(self) -> dict:
         """Plain-data summary for reports (JSON)."""

@@ -338,6 +338,15 @@ class GroundTruth:
         return GroundTruth(fit(self.boxes), self.rotated, fit(self.scale), fit(self.rotation_deg),
                            self.rotation_period, fit(self.ellipses), self.source)
 
+    def reversed(self) -> "GroundTruth":
+        """The ground truth of the frames played backwards: row ``k`` is row ``n - 1 - k``, and ``scale`` and
+        ``rotation_deg`` are relative to the new first valid row (the old last one)."""
+        valid = self.valid[::-1]
+        rotation = None if self.rotation_deg is None else _relative(self.rotation_deg[::-1], valid, ratio=False)
+        ellipses = None if self.ellipses is None else self.ellipses[::-1].copy()
+        return GroundTruth(self.boxes[::-1].copy(), self.rotated, _relative(self.scale[::-1], valid, ratio=True),
+                           rotation, self.rotation_period, ellipses, self.source)
+
     def initial_roi(self) -> Ellipse:
         """The ellipse inscribed in the first valid box (the ``.gt.csv`` ellipse itself)."""
         i = self.first_valid

@@ -21,8 +21,8 @@ from logpolar_track.bench import run_bench, run_one, start_roi
 from logpolar_track.errors import UsageError
 from logpolar_track.cli import main
 from logpolar_track.datasets import discover
-from logpolar_track.geometry import Ellipse
-from logpolar_track.synthetic import similarity_path, synthetic_sequence
+from logpolar_track.geometry import Ellipse, parse_roi
+from logpolar_track.synthetic import Pose, similarity_path, synthetic_sequence
 from logpolar_track.trackers import base
 from logpolar_track.trackers.base import Tracker, TrackState
 from logpolar_track.trackers.opencv import CSRTTracker, KCFTracker
@@ -259,12 +259,55 @@ def test_bench_from_several_starts_gives_their_mean(dataset):
     assert res.stderr.startswith("Means over 3 starts per sequence")
 
 
-SPEED_TAKES_NO = "no --dataset, --per-frame, --plot, --starts, --threads, --param, --jobs or --scheduler"
+def _otb_folder(root: Path, name: str, poses: list[Pose], roi: Ellipse) -> Path:
+    """An OTB sequence folder (``img/0001.jpg``..., ``groundtruth_rect.txt`` of 1-based x,y,w,h) of the
+    synthetic object following ``poses``."""
+    folder = root / name
+    (folder / "img").mkdir(parents=True)
+    lines = []
+    for i, (frame, pose) in enumerate(zip(synthetic_sequence(poses, roi, size=(200, 140), seed=3), poses), 1):
+        cv2.imwrite(str(folder / "img" / f"{i:04d}.jpg"), frame)
+        x, y, w, h = roi.moved(pose.cx, pose.cy, pose.scale, pose.rotation_deg).bounding_box()
+        lines.append(f"{x + 1:.2f},{y + 1:.2f},{w:.2f},{h:.2f}")
+    (folder / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n")
+    return folder
+
+
+def test_bench_plays_image_sequences_backwards(tmp_path):
+    # The object travels 60 px and grows by 30 %: played backwards it starts where it ended and shrinks back.
+    roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
+    n = 16
+    poses = [Pose(60.0 + 4 * i, 70.0, 1.3 ** (i / (n - 1)), 0.0) for i in range(n)]
+    _otb_folder(tmp_path, "walk", poses, roi)
+    res = _run("bench", "--dataset", tmp_path, "--trackers", "lpcf", "--backwards", "--json", "-", "-q")
+    assert res.exit_code == 0, res.stderr
+    doc = json.loads(res.stdout)
+    assert doc["parameters"]["backwards"] is True
+    [seq], [result] = doc["sequences"], doc["results"]
+    assert seq["name"] == result["sequence"] == "walk-backwards" and seq["start_frame"] == 0
+    last = roi.moved(poses[-1].cx, poses[-1].cy, poses[-1].scale, 0.0)
+    assert parse_roi(seq["roi"]).centre == pytest.approx(last.centre, abs=0.01)  # inscribed in the last box
+    # Tracked from the last frame back to the first (frames in the wrong order would lose it at once).
+    assert result["frames_scored"] == n and result["success_rate"] == 1.0
+    assert result["scale_error_median_pct"] < 3.0
+
+
+def test_bench_plays_only_image_sequences_backwards(dataset):
+    res = _run("bench", "--dataset", dataset, "--trackers", "fixed", "--backwards")
+    assert res.exit_code == 2 and res.stdout == ""
+    assert res.stderr.strip().splitlines() == [
+        "lptrack: error: 'alpha' is a video (alpha.avi); only image sequences (OTB, VOT, UAV123 folders) can be "
+        "played backwards"]
+
+
+SPEED_TAKES_NO = ("no --dataset, --per-frame, --plot, --starts, --backwards, --threads, --param, --jobs or "
+                  "--scheduler")
 
 
 @pytest.mark.parametrize("args, message", [
     (["--starts", "14"], "1<=x<=13"),
     (["--starts", "2", "--speed"], SPEED_TAKES_NO),
+    (["--backwards", "--speed"], SPEED_TAKES_NO),
     (["--threads", "2", "--speed"], SPEED_TAKES_NO),
     (["--param", "window=9", "--speed"], SPEED_TAKES_NO),
     (["--jobs", "2", "--speed"], SPEED_TAKES_NO),

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from logpolar_track.evaluate import (GroundTruthError, Track, auc, box_iou, ground_truth_from_boxes,
+from logpolar_track.evaluate import (GroundTruth, GroundTruthError, Track, auc, box_iou, ground_truth_from_boxes,
                                      ground_truth_from_ellipses, precision_curve, read_box_text, read_gt_csv,
                                      read_track_csv, rect_from_polygon, rotated_box_corners, rotated_box_iou,
                                      rotation_errors, scale_errors, score_track, success_curve, success_rate,
@@ -316,3 +316,17 @@ def test_gt_csv_without_rotation_unwraps_the_angles_and_scores_them_modulo_half_
     # Half a turn off is the same ellipse: no error modulo 180, the whole of it where the turn is known.
     assert score_track(modulo, half_turn_off)["rotation_error_median_deg"] == pytest.approx(0.0, abs=1e-9)
     assert score_track(full, half_turn_off)["rotation_error_median_deg"] == pytest.approx(180.0)
+
+
+def test_ground_truth_reversed_is_relative_to_its_new_first_row():
+    # Four frames; the last has no ground truth, so the reversed truth starts on its second row.
+    rows = np.array([[10, 20, 8, 8], [12, 20, 10, 10], [14, 20, 12, 12], [np.nan] * 4])
+    gt = ground_truth_from_boxes(rows)
+    gt = GroundTruth(gt.boxes, True, gt.scale, np.array([0.0, 30.0, 50.0, np.nan]), 180.0, None, "vot")
+    back = gt.reversed()
+    assert back.valid.tolist() == [False, True, True, True] and back.first_valid == 1
+    np.testing.assert_array_equal(back.boxes[1:], gt.boxes[2::-1])
+    np.testing.assert_allclose(back.scale[1:], [1.0, 10 / 12, 8 / 12])
+    np.testing.assert_allclose(back.rotation_deg[1:], [0.0, -20.0, -50.0])
+    assert (back.rotated, back.rotation_period, back.source) == (True, 180.0, "vot")
+    assert back.reversed().boxes[:3].tolist() == gt.boxes[:3].tolist()

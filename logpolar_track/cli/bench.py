@@ -47,6 +47,7 @@ Examples:
   lptrack bench --dataset ~/data/otb --trackers fixed,cv-mil --json res.json
   lptrack bench --trackers cv-csrt,cv-kcf --json - > res.json
   lptrack bench --dataset ~/data/otb --trackers lpcf,cv-csrt --starts 13 -j 2
+  lptrack bench --dataset ~/data/otb --trackers lpcf,cv-csrt --backwards
   lptrack bench --dataset ~/data/otb --trackers lpcf --param padding=1.5
 """
 
@@ -73,6 +74,10 @@ Examples:
               help=f"Track each sequence from N initial ROIs: the ground truth's, then OTB's spatial robustness "
                    f"(SRE) ones: shifted by 10 % of the box (4 to the sides, 4 to the corners), scaled by 0.8, "
                    f"0.9, 1.1, 1.2 (at most {len(STARTS)}). Each row is the mean over its starts.")
+@click.option("--backwards", is_flag=True,
+              help="Play each sequence backwards instead, from its last frame with ground truth (image sequences "
+                   "only; rows named NAME-backwards): the same footage as other tracking problems, a check on "
+                   "sequences a tracker was not tuned on.")
 @click.option("--threads", type=click.IntRange(min=1), default=None, metavar="N",
               help="OpenCV threads per tracker. Default 1: every tracker, lptrack's and OpenCV's, on one core, so "
                    "frames/s compare per core (more lets OpenCV's CSRT spread its work over cores).")
@@ -84,8 +89,8 @@ Examples:
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no notes on stderr.")
 def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, ...], json_out: str | None,
           per_frame: bool,
-          plot_out: Path | None, jobs: int, scheduler: str | None, starts: int, threads: int | None, quiet: bool,
-          speed: bool, overwrite: bool) -> None:
+          plot_out: Path | None, jobs: int, scheduler: str | None, starts: int, backwards: bool, threads: int | None,
+          quiet: bool, speed: bool, overwrite: bool) -> None:
     """Run trackers over sequences with ground truth and compare them.
 
     Prints one row per sequence and tracker and a mean row per tracker:
@@ -98,10 +103,10 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     """
     jobs_given = click.get_current_context().get_parameter_source("jobs") is not click.core.ParameterSource.DEFAULT
     if speed:
-        if (datasets or per_frame or plot_out is not None or starts != 1 or threads is not None or params
-                or jobs_given or scheduler is not None):
+        if (datasets or per_frame or plot_out is not None or starts != 1 or backwards or threads is not None
+                or params or jobs_given or scheduler is not None):
             raise UsageError("--speed times trackers on a synthetic video on one core; it takes no --dataset, "
-                             "--per-frame, --plot, --starts, --threads, --param, --jobs or --scheduler")
+                             "--per-frame, --plot, --starts, --backwards, --threads, --param, --jobs or --scheduler")
     check_jobs_or_scheduler(jobs_given, scheduler)
     # Outputs are checked before the work (a benchmark may run for hours), as `lptrack run` checks its own.
     _check_json_out(json_out, overwrite)
@@ -124,6 +129,8 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     names, skipped = _runnable_trackers(trackers)
     tuning = parse_param_options(params, names, [name for name, _ in skipped])
     sequences = collect_sequences(datasets)
+    if backwards:
+        sequences = [s.backwards() for s in sequences]
     _note_skipped(skipped, quiet)
     threads = TRACKING_OPENCV_THREADS if threads is None else threads
 
@@ -148,7 +155,7 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     summary = summarise(results, names)
     table = format_table(results, summary)
     parameters = {"datasets": [str(d) for d in datasets], "trackers": names, "jobs": jobs,
-                  "scheduler": scheduler, "starts": starts, "opencv_threads": threads,
+                  "scheduler": scheduler, "starts": starts, "backwards": backwards, "opencv_threads": threads,
                   "tracker_params": {name: chosen for name, chosen in tuning.items() if chosen},
                   "start_perturbations": [list(p) for p in STARTS[:starts]]}
     failed = [r for r in results if r["error"]]

@@ -150,3 +150,18 @@ def test_shared_benchmark_sequences():
     _, _, frame = next(seqs["human3"].frames())
     assert frame.shape == (640, 480, 3)
     assert math.isfinite(seqs["boat1"].gt.scale[-1])
+
+
+@pytest.mark.skipif(not SHARED_DATA.is_dir(), reason="../shared/data (real benchmark sequences) is absent")
+def test_shared_sequences_played_backwards():
+    seqs = {s.name: s for s in discover(SHARED_DATA)}
+    crossing, bag = seqs["crossing"].backwards(), seqs["bag"].backwards()
+    assert crossing.name == "crossing-backwards" and crossing.start == 0 and crossing.n_frames == 120
+    assert crossing.roi.to_spec() == "62,110,7,18,0"  # the last line, 56,93,14,36 (1-based)
+    _, _, first = next(crossing.frames())
+    np.testing.assert_array_equal(first, cv2.imread(str(SHARED_DATA / "crossing" / "img" / "0120.jpg")))
+    # bag's last polygon is the axis-aligned rectangle (132, 107)-(307, 256); its rotation counts from there.
+    assert (bag.roi.cx, bag.roi.cy, bag.roi.a, bag.roi.b) == pytest.approx((219.5, 181.5, 87.5, 74.5), abs=0.2)
+    forwards = seqs["bag"].gt
+    assert bag.gt.rotation_deg[0] == 0.0 and bag.gt.rotation_deg[-1] == pytest.approx(-forwards.rotation_deg[-1])
+    assert bag.gt.scale[-1] == pytest.approx(1 / forwards.scale[-1])

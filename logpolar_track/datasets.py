@@ -71,6 +71,8 @@ class Sequence:
         Frames per second (:data:`IMAGE_FPS` for image sequences).
     frame_files : tuple of Path or None
         Frame images in order, for image sequences.
+    played_backwards : bool
+        Made by :meth:`backwards`: frame ``k`` is the ``k``-th image from the last.
     """
 
     name: str
@@ -83,6 +85,7 @@ class Sequence:
     n_frames: int
     fps: float
     frame_files: tuple | None = None
+    played_backwards: bool = False
 
     def frames(self) -> Iterator[tuple[int, float, np.ndarray]]:
         """Yield ``(index, time_s, frame)`` for every frame, decoding one at a time (BGR uint8).
@@ -115,14 +118,14 @@ class Sequence:
                              "folders) can be played backwards")
         gt = self.gt.truncated(len(self.frame_files)).reversed()
         return replace(self, name=f"{self.name}-backwards", gt=gt, roi=gt.initial_roi(), start=gt.first_valid,
-                       frame_files=self.frame_files[::-1])
+                       frame_files=self.frame_files[::-1], played_backwards=True)
 
     def describe(self) -> dict:
         """Plain-data summary for reports (JSON)."""
         return {"name": self.name, "kind": self.kind, "path": str(self.path), "ground_truth": str(self.gt_path),
                 "frames": self.n_frames, "scored_frames": int(self.gt.valid[: self.n_frames or None].sum()),
                 "rotated_ground_truth": bool(self.gt.rotated), "start_frame": self.start,
-                "roi": self.roi.to_spec()}
+                "roi": self.roi.to_spec(), "backwards": self.played_backwards}
 
 
 def _image_frames(files, fps: float):

@@ -284,7 +284,7 @@ def test_bench_plays_image_sequences_backwards(tmp_path):
     doc = json.loads(res.stdout)
     assert doc["parameters"]["backwards"] is True
     [seq], [result] = doc["sequences"], doc["results"]
-    assert seq["name"] == result["sequence"] == "walk-backwards" and seq["start_frame"] == 0
+    assert seq["name"] == result["sequence"] == "walk-backwards" and seq["start_frame"] == 0 and seq["backwards"]
     last = roi.moved(poses[-1].cx, poses[-1].cy, poses[-1].scale, 0.0)
     assert parse_roi(seq["roi"]).centre == pytest.approx(last.centre, abs=0.01)  # inscribed in the last box
     # Tracked from the last frame back to the first (frames in the wrong order would lose it at once).
@@ -296,8 +296,8 @@ def test_bench_plays_only_image_sequences_backwards(dataset):
     res = _run("bench", "--dataset", dataset, "--trackers", "fixed", "--backwards")
     assert res.exit_code == 2 and res.stdout == ""
     assert res.stderr.strip().splitlines() == [
-        "lptrack: error: 'alpha' is a video (alpha.avi); only image sequences (OTB, VOT, UAV123 folders) can be "
-        "played backwards"]
+        "lptrack: error: --backwards plays image sequences only (OTB, VOT, UAV123 folders), and alpha.avi is a "
+        "video; give --dataset with such folders"]
 
 
 SPEED_TAKES_NO = ("no --dataset, --per-frame, --plot, --starts, --backwards, --threads, --param, --jobs or "

@@ -49,6 +49,18 @@ def test_otb_tabs_crlf_and_leading_nan_line(tmp_path):
     assert (seq.roi.cx, seq.roi.cy) == (4, 4)
 
 
+def test_a_sequence_played_backwards_starts_on_its_last_frame_with_ground_truth(tmp_path):
+    # Frames 5 and 6 have no line and frame 4 a NaN one: played backwards, frame 3 (forwards) comes first.
+    lines = [f"{10 + i},21,10,6" for i in range(4)] + ["NaN,NaN,NaN,NaN"]
+    (seq,) = discover(_otb(tmp_path, "walk", 7, lines))
+    back = seq.backwards()
+    assert (back.name, back.start, back.n_frames, back.played_backwards) == ("walk-backwards", 3, 7, True)
+    assert back.gt.valid.tolist() == [False, False, False, True, True, True, True]
+    assert (back.roi.cx, back.roi.cy, back.roi.a, back.roi.b) == (17, 23, 5, 3)  # line 4, 1-based x=13 -> 12, +5
+    assert [int(f.mean()) for _, _, f in back.frames()] == pytest.approx([70, 60, 50, 40, 30, 20, 10], abs=2)
+    assert back.describe()["start_frame"] == 3 and back.describe()["backwards"] and not seq.describe()["backwards"]
+
+
 def test_spaces_and_more_lines_than_frames(tmp_path):
     seq_dir = _otb(tmp_path, "s", 2, ["1 1 8 8", "2 1 8 8", "3 1 8 8"], sep=" ")
     (seq,) = discover(seq_dir)

@@ -130,6 +130,10 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     tuning = parse_param_options(params, names, [name for name, _ in skipped])
     sequences = collect_sequences(datasets)
     if backwards:
+        videos = [s.path.name for s in sequences if s.frame_files is None]
+        if videos:
+            raise UsageError(f"--backwards plays image sequences only (OTB, VOT, UAV123 folders), and {videos[0]} is a "
+                             "video; give --dataset with such folders")
         sequences = [s.backwards() for s in sequences]
     _note_skipped(skipped, quiet)
     threads = TRACKING_OPENCV_THREADS if threads is None else threads

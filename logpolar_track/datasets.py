@@ -116,7 +116,7 @@ class Sequence:
         if self.frame_files is None:
             raise UsageError(f"'{self.name}' is a video ({self.path.name}); only image sequences (OTB, VOT, UAV123 "
                              "folders) can be played backwards")
-        gt = self.gt.truncated(len(self.frame_files)).reversed()
+        gt = self.gt.reversed()  # one row per frame already (see _image_sequence)
         return replace(self, name=f"{self.name}-backwards", gt=gt, roi=gt.initial_roi(), start=gt.first_valid,
                        frame_files=self.frame_files[::-1], played_backwards=True)
 

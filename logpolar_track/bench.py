@@ -168,6 +168,7 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
     params = dict(params or {})
     tracker_params = dict((params.get("tracker_params") or {}).get(tracker_name, {}))
     rows: list[tuple] = []
+    statuses: list[str] = []
     update_time, updates, lost, error = 0.0, 0, 0, None
     try:
         roi = start_roi(sequence.roi, start)
@@ -177,22 +178,24 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
                 if index < sequence.start:
                     continue
                 if index == sequence.start:
-                    state, ok = tracker.init(frame, roi), True
+                    state, status = tracker.init(frame, roi), "init"
                 else:
                     t0 = time.perf_counter()
                     ok, state = tracker.update(frame)
                     update_time += time.perf_counter() - t0
                     updates += 1
                     lost += not ok
+                    status = "tracked" if ok else "lost"
                 e = state.ellipse
                 rot = math.nan if state.rotation_deg is None else state.rotation_deg
                 rows.append((index, e.cx, e.cy, e.a, e.b, e.angle_deg, state.scale, rot, state.score))
+                statuses.append(status)
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # one failing pair must not sink the whole benchmark; it is reported
         error = f"{type(exc).__name__}: {exc}"
     table = np.array(rows, float).reshape(-1, 9)
-    track = Track(table[:, 0].astype(int), table[:, 1:6], table[:, 6], table[:, 7], table[:, 8])
+    track = Track(table[:, 0].astype(int), table[:, 1:6], table[:, 6], table[:, 7], table[:, 8], statuses)
     result = {"sequence": sequence.name, "tracker": tracker_name, "start": start,
               "frames": len(rows) + sequence.start, "updates": updates, "lost_frames": lost,
               "update_time_s": update_time, "fps": updates / update_time if update_time > 0 else math.nan,
@@ -247,7 +250,7 @@ def run_bench(sequences: list[Sequence], trackers: list[str], *, params: Mapping
 
 #: Per-run numbers that :func:`mean_over_starts` averages (the rest are summed, or kept from the first run).
 _MEAN_KEYS = ("success_rate", "auc", "iou_mean", "precision_20", "centre_error_median_px", "scale_error_median_pct",
-              "rotation_error_median_deg")
+              "rotation_error_median_deg", "lost_rate", "tracked_off_rate")
 
 
 def mean_over_starts(runs: list[dict]) -> dict:
@@ -308,6 +311,8 @@ def summarise(results: list[dict], trackers: list[str]) -> list[dict]:
             "centre_error_median_px": _mean(r["centre_error_median_px"] for r in rs),
             "scale_error_median_pct": _mean(r["scale_error_median_pct"] for r in rs),
             "rotation_error_median_deg": _mean(r["rotation_error_median_deg"] for r in rs),
+            "lost_rate": _mean(r["lost_rate"] for r in rs),
+            "tracked_off_rate": _mean(r["tracked_off_rate"] for r in rs),
             "fps": updates / time_s if time_s > 0 else None,
             "success_curve": succ.tolist(),
             "success_curve_auc": auc(succ) if curves else None,
@@ -329,6 +334,8 @@ _COLUMNS = (  # header, key, format: fraction shown as percent ("pct"), or a for
     ("centre_px", "centre_error_median_px", ".1f"),
     ("scale_err%", "scale_error_median_pct", ".1f"),
     ("rot_err_deg", "rotation_error_median_deg", ".1f"),
+    ("lost%", "lost_rate", "pct"),
+    ("off_tracked%", "tracked_off_rate", "pct"),
     ("fps", "fps", ".1f"),
 )
 

@@ -40,6 +40,14 @@ rotation error
     costs 360 degrees), and **modulo 180 degrees** (error in [0, 90]) for rectangle ground truth such as VOT's,
     whose rectangles look the same after half a turn so their cumulative rotation is only known up to
     multiples of 180 degrees.
+lost rate
+    Share of scored frames the tracker reported ``lost`` (its ``status``; OpenCV's trackers: ``update`` said not
+    ok). Those frames are scored like the others, with the geometry the tracker reported for them.
+tracked off the object
+    Share of the scored frames reported ``tracked`` whose box does not overlap the ground truth at all (IoU 0, VOT's
+    failure): how often a frame said to be tracked is not. With the lost rate it says how far ``status`` can be
+    trusted: a tracker that reports ``lost`` on many frames but is rarely off the object when it says
+    ``tracked`` gives data whose ``tracked`` rows a user can keep.
 
 All metric functions are pure functions of numpy arrays.
 """
@@ -774,9 +782,10 @@ def score_track(gt: GroundTruth, track: Track) -> dict:
     dict
         ``frames_scored``, ``frames_missing``, ``success_rate`` (fraction), ``auc``, ``iou_mean``,
         ``precision_20`` (fraction), ``centre_error_median_px``, ``scale_error_median_pct``,
-        ``rotation_error_median_deg`` (None where not measurable), ``success_curve`` (21 values),
-        ``precision_curve`` (51 values), and per-frame ``frames``, ``iou``, ``centre_error_px``.
-        Undefined numbers are NaN.
+        ``rotation_error_median_deg`` (None where not measurable), ``lost_rate`` and ``tracked_off_rate``
+        (fractions; NaN where the track has no ``status``, or no frame scored is reported tracked),
+        ``success_curve`` (21 values), ``precision_curve`` (51 values), and per-frame ``frames``, ``iou``,
+        ``centre_error_px``. Undefined numbers are NaN.
     """
     valid = gt.valid
     pred_index = {int(f): i for i, f in enumerate(track.frames)}
@@ -805,6 +814,13 @@ def score_track(gt: GroundTruth, track: Track) -> dict:
 
     scale_med = math.nan
     rot_med = None
+    lost_rate = tracked_off_rate = math.nan
+    if rows.size and len(track.status) == len(track.frames):
+        status = np.array(track.status, dtype=object)[rows]
+        lost_rate = float(np.mean(status == "lost"))
+        tracked = status == "tracked"
+        if tracked.any():
+            tracked_off_rate = float(np.mean(np.nan_to_num(iou[tracked]) <= 0.0))
     if rows.size:
         ps = track.scale[rows] / track.scale[rows[0]]
         gs = gt.scale[frames] / gt.scale[frames[0]]
@@ -825,6 +841,8 @@ def score_track(gt: GroundTruth, track: Track) -> dict:
         "centre_error_median_px": _nanmedian(err),
         "scale_error_median_pct": scale_med,
         "rotation_error_median_deg": rot_med,
+        "lost_rate": lost_rate,
+        "tracked_off_rate": tracked_off_rate,
         "success_curve": curve.tolist(),
         "precision_curve": prec.tolist(),
         "frames": frames.tolist(),

@@ -83,8 +83,41 @@ def oracle(monkeypatch):
     return _Oracle.name
 
 
+class _Boaster(_Oracle):
+    """The ground truth until frame 6, then 100 px off it while still saying tracked; lost on frame 3."""
+
+    name = "test-boaster"
+
+    def update(self, frame):
+        self.i += 1
+        ok, state = self.i != 3, self._state()
+        if self.i >= 6:
+            e = state.ellipse
+            state = TrackState(e.moved(e.cx + 100.0, e.cy), state.scale, state.rotation_deg, 1.0)
+        return ok, state
+
+
 def _run(*args):
     return CliRunner().invoke(main, list(map(str, args)))
+
+
+def test_bench_reports_how_often_tracked_is_wrong(dataset, oracle, monkeypatch):
+    monkeypatch.setitem(base._REGISTRY, _Boaster.name, _Boaster)
+    res = _run("bench", "--dataset", dataset, "--trackers", f"{oracle},{_Boaster.name}", "--json", "-", "--quiet")
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.stdout)
+    for r in doc["results"]:
+        if r["tracker"] == oracle:
+            assert r["lost_rate"] == 0 and r["tracked_off_rate"] == 0
+        else:  # 12 frames: the first is the start, frame 3 lost, frames 6 to 11 (6 of the 10 tracked) off
+            assert r["lost_rate"] == pytest.approx(1 / 12) and r["tracked_off_rate"] == pytest.approx(6 / 10)
+    summary = {s["tracker"]: s for s in doc["summary"]}
+    assert summary[_Boaster.name]["tracked_off_rate"] == pytest.approx(0.6)
+    table = res.stderr.splitlines()  # with --json -, the table goes to stderr
+    header = table[0].split()
+    assert header[-3:] == ["lost%", "off_tracked%", "fps"]
+    row = next(line.split() for line in table if line.startswith("mean") and _Boaster.name in line)
+    assert row[header.index("lost%") + 1:header.index("off_tracked%") + 2] == ["8.3", "60.0"]
 
 
 def test_bench_end_to_end_json(dataset, oracle, tmp_path):

@@ -208,6 +208,26 @@ def test_score_track_skips_unscored_and_missing_frames():
     assert m["frames"] == [0, 1, 3] and m["frames_missing"] == 2
 
 
+def test_score_track_says_how_often_tracked_is_wrong():
+    boxes = np.tile([0.0, 0, 10, 10], (7, 1))
+    boxes[5] = np.nan  # not scored, whatever its status
+    gt = ground_truth_from_boxes(boxes)
+    on, touching, off = [5.0, 5, 5, 5, 0], [14.0, 5, 5, 5, 0], [40.0, 40, 5, 5, 0]
+    track = _ellipse_track([on, on, off, off, touching, off, on], np.ones(7), np.full(7, np.nan))
+    track.status = ["init", "tracked", "tracked", "lost", "tracked", "tracked", "tracked"]
+    m = score_track(gt, track)
+    assert m["frames_scored"] == 6
+    assert m["lost_rate"] == pytest.approx(1 / 6)
+    # Of the 4 scored frames reported tracked, one misses the box (frame 2); frame 4 only overlaps it a little.
+    assert m["tracked_off_rate"] == pytest.approx(1 / 4)
+    track.status = []  # a track without statuses (another tool's CSV without the column) has no such figures
+    m = score_track(gt, track)
+    assert math.isnan(m["lost_rate"]) and math.isnan(m["tracked_off_rate"])
+    track.status = ["init", "lost", "lost", "lost", "lost", "lost", "lost"]
+    m = score_track(gt, track)
+    assert m["lost_rate"] == pytest.approx(5 / 6) and math.isnan(m["tracked_off_rate"])
+
+
 # ----------------------------------------------------------------------------------------- readers
 
 @pytest.mark.parametrize("sep", [",", "\t", " "])

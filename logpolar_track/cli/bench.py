@@ -39,6 +39,9 @@ Columns (per sequence and tracker; 'mean' rows average over sequences):
   scale_err%   median |scale / true scale - 1|
   rot_err_deg  median rotation error (ground truth with an angle only;
                modulo 180 for rectangles); n/a for OpenCV's trackers
+  lost%        frames reported lost
+  off_tracked% frames reported tracked whose box misses the object
+               (IoU 0): how often 'tracked' is wrong
   fps          tracker update() calls per second (decoding excluded)
 
 \b

@@ -86,11 +86,34 @@ def resolve_trackers(spec: str | None) -> tuple[list[str], list[tuple[str, str]]
 #: Initial ROIs of the starts, in order: ``(dx, dy, scale)``, shifts as fractions of the ROI's bounding box's width
 #: and height (x right, y down), scale of both semi-axes about the centre. Start 0 is the ground truth's ROI; 1-12
 #: are OTB's SRE perturbations: 4 centre shifts and 4 corner shifts by 10 % of the box, and scales 0.8, 0.9, 1.1
-#: and 1.2.
+#: and 1.2; 13-32 are 20 more, drawn once at random (shifts uniform within 8 % of the box, scales within 0.9 to
+#: 1.1; NumPy's ``default_rng(0)``) and written out, so that every machine and NumPy gets the same: 13 starts
+#: leave a mean that moves by about 0.01 with chance (a 1 % change of one of lpcf's parameters moves it that much),
+#: and more starts narrow that.
 STARTS = ((0.0, 0.0, 1.0),
           (-0.1, 0.0, 1.0), (0.1, 0.0, 1.0), (0.0, -0.1, 1.0), (0.0, 0.1, 1.0),
           (-0.1, -0.1, 1.0), (0.1, -0.1, 1.0), (-0.1, 0.1, 1.0), (0.1, 0.1, 1.0),
-          (0.0, 0.0, 0.8), (0.0, 0.0, 0.9), (0.0, 0.0, 1.1), (0.0, 0.0, 1.2))
+          (0.0, 0.0, 0.8), (0.0, 0.0, 0.9), (0.0, 0.0, 1.1), (0.0, 0.0, 1.2),
+          (0.021913869971432687, -0.03683412579778075, 0.908194704787239),
+          (-0.07735557831543535, 0.05012323827204358, 1.0825511154555445),
+          (0.017061724122748784, 0.03671944975743975, 1.0087249982930846),
+          (0.06961158780604292, 0.050536568659445155, 0.9005477000340296),
+          (0.05718468425401109, -0.07462630795112571, 1.0459310892859888),
+          (-0.05189510070359056, 0.058108627575981855, 1.0082922440498183),
+          (-0.032046097514018435, -0.012370044608374653, 0.9056639342290926),
+          (-0.06011467576006977, 0.027299906350980854, 1.02943790231485),
+          (0.01846161783700062, -0.01861159131809865, 1.0994419871578422),
+          (0.0769336542041968, 0.029686717516911154, 1.0300918552535634),
+          (0.030151476891350407, -0.017772572163343395, 0.9270193010044823),
+          (0.03543813443105308, 0.004056691596116144, 0.9620483751117912),
+          (-0.0022663425869137444, 0.062318053495840034, 1.0868087031912501),
+          (-0.022752768526548763, 0.011444772916761756, 0.9643738782151885),
+          (0.015088004831951482, -0.02593420391885868, 0.9783238001056322),
+          (0.06244389632076679, -0.04365478503465924, 1.0246374289372087),
+          (-0.06655754502681843, 0.05322306362454364, 1.0574196614977367),
+          (-0.041700889121127654, 0.06023747692971261, 0.9117136069610389),
+          (-0.02622127031269434, -0.05595528529682575, 0.9900678733298575),
+          (0.04741188324596708, -0.04309724656100041, 0.9104042602128819))
 
 
 def start_roi(roi: Ellipse, start: int) -> Ellipse:
@@ -378,6 +401,83 @@ def format_table(results: list[dict], summary: list[dict], *, speed: bool = True
     return "\n".join(out) + "\n"
 
 
+def paired_differences(results: list[dict], trackers: list[str]) -> list[dict]:
+    """The first of ``trackers`` against each other one, start by start: per sequence, the mean over the starts
+    of its AUC minus the other's from the same initial ROI (a paired comparison), and the standard error of that
+    mean; over the sequences, the mean of those and its standard error. Empty with one start or one tracker.
+
+    The standard errors count only the chance of which starts were drawn (a hard sequence's AUC varies by 0.3 or
+    more between OTB's starts), treating the sequences as fixed: they say whether a difference on these sequences
+    would hold with other starts, not whether it would hold on other sequences.
+
+    Returns
+    -------
+    list of dict
+        One per other tracker: ``tracker``, ``against`` (the first tracker), ``difference`` and
+        ``standard_error`` (AUC, over the sequences: the mean of theirs and ``sqrt(sum of squares) / n``),
+        ``ahead``, ``level`` and ``behind`` (how many sequences the first tracker is ahead on by more than two
+        standard errors, within them, behind by more), and ``sequences``: ``{name: {"difference",
+        "standard_error", "starts"}}`` (starts where both runs scored frames; standard error None with one).
+    """
+    if len(trackers) < 2:
+        return []
+    by_pair = {(r["sequence"], r["tracker"]): r for r in results}
+    names = list(dict.fromkeys(r["sequence"] for r in results))
+    first = trackers[0]
+    out = []
+    for other in trackers[1:]:
+        sequences = {}
+        for name in names:
+            mine, theirs = by_pair.get((name, first)), by_pair.get((name, other))
+            if mine is None or theirs is None or "auc_per_start" not in mine or "auc_per_start" not in theirs:
+                continue
+            d = np.array([a - b for a, b in zip(mine["auc_per_start"], theirs["auc_per_start"])
+                          if a is not None and b is not None and math.isfinite(a) and math.isfinite(b)])
+            if d.size == 0:
+                continue
+            se = float(d.std(ddof=1) / math.sqrt(d.size)) if d.size > 1 else None
+            sequences[name] = {"difference": float(d.mean()), "standard_error": se, "starts": int(d.size)}
+        if not sequences:
+            continue
+        diffs = [s["difference"] for s in sequences.values()]
+        errors = [s["standard_error"] for s in sequences.values()]
+        known = all(e is not None for e in errors)
+        se = math.sqrt(sum(e * e for e in errors)) / len(errors) if known else None
+        verdicts = [0 if e is None or abs(d) <= 2 * e else (1 if d > 0 else -1) for d, e in zip(diffs, errors)]
+        out.append({"tracker": other, "against": first, "difference": float(np.mean(diffs)), "standard_error": se,
+                    "ahead": verdicts.count(1), "level": verdicts.count(0), "behind": verdicts.count(-1),
+                    "sequences": sequences})
+    return out
+
+
+def format_paired(paired: list[dict]) -> str:
+    """:func:`paired_differences` as plain text: a column per other tracker, a row per sequence, then the mean
+    and the count of sequences ahead / level / behind; empty if there is nothing to compare."""
+    if not paired:
+        return ""
+
+    def cell(d, se):
+        return f"{d:+.3f}" + ("" if se is None else f" ± {se:.3f}")
+
+    names = list(dict.fromkeys(n for p in paired for n in p["sequences"]))
+    header = ["sequence"] + [p["tracker"] for p in paired]
+    rows = [[n] + [cell(p["sequences"][n]["difference"], p["sequences"][n]["standard_error"])
+                   if n in p["sequences"] else "n/a" for p in paired] for n in names]
+    rows.append(None)
+    rows.append([f"mean ({len(names)})"] + [cell(p["difference"], p["standard_error"]) for p in paired])
+    rows.append(["ahead/level/behind"] + [f"{p['ahead']}/{p['level']}/{p['behind']}" for p in paired])
+    widths = [max(len(header[i]), *(len(r[i]) for r in rows if r)) for i in range(len(header))]
+
+    def line(cells):
+        return "  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(cells, widths)))
+
+    title = (f"{paired[0]['against']} minus each tracker, AUC from the same starts (mean ± standard error over "
+             f"starts; ahead/behind: beyond two):")
+    out = [title, line(header), line(["-" * w for w in widths])]
+    out += [line(r) if r else line(["-" * w for w in widths]) for r in rows]
+    return "\n".join(out) + "\n"
+
+
 def _opencv_flavour() -> str:
     from importlib.metadata import PackageNotFoundError, version
 
@@ -445,13 +545,15 @@ def _clean(value):
 
 
 def bench_document(results: list[dict], summary: list[dict], sequences: list[Sequence], *,
-                   parameters: Mapping, skipped: list[tuple[str, str]] = (), per_frame: bool = False) -> dict:
+                   parameters: Mapping, skipped: list[tuple[str, str]] = (), per_frame: bool = False,
+                   paired: list[dict] = ()) -> dict:
     """The whole benchmark as one JSON-ready document (``schema_version`` :data:`SCHEMA_VERSION`).
 
     Keys: ``schema_version``, ``tool``, ``created`` (UTC, ISO 8601), ``versions``, ``machine``, ``parameters``
     (with the metric definitions' constants), ``sequences``, ``skipped_trackers``, ``results`` (one per
     sequence and tracker, curves included; per-frame ``frames``/``iou``/``centre_error_px`` only with
-    ``per_frame``), ``summary`` (one per tracker). Undefined numbers are null.
+    ``per_frame``), ``summary`` (one per tracker), ``paired`` (:func:`paired_differences`; empty with one start or
+    one tracker). Undefined numbers are null.
     """
     env = environment()
     kept = [r if per_frame else {k: v for k, v in r.items() if k not in PER_FRAME_KEYS} for r in results]
@@ -470,6 +572,7 @@ def bench_document(results: list[dict], summary: list[dict], sequences: list[Seq
         "skipped_trackers": [{"tracker": n, "reason": why} for n, why in skipped],
         "results": kept,
         "summary": summary,
+        "paired": list(paired),
     })
 
 
@@ -572,5 +675,6 @@ def eval_document(pred_path, gt_path, metrics: dict, *, per_frame: bool = True) 
 
 
 __all__ = ["run_one", "run_bench", "mean_over_starts", "start_roi", "STARTS", "summarise", "format_table",
+           "paired_differences", "format_paired",
            "bench_document", "eval_document", "plot_curves", "resolve_trackers", "collect_sequences",
            "default_dataset", "write_text_atomic", "matplotlib_missing", "environment", "SCHEMA_VERSION"]

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from logpolar_track.bench import run_bench, run_one, start_roi
+from logpolar_track.bench import format_paired, paired_differences, run_bench, run_one, start_roi
 from logpolar_track.errors import UsageError
 from logpolar_track.cli import main
 from logpolar_track.datasets import discover
@@ -260,7 +260,7 @@ def test_vector_extensions_name_the_widest_the_cpu_reports(tmp_path, cpuinfo, ex
 
 def test_start_rois_are_otbs_spatial_robustness_starts():
     """Start 0 is the ground truth's ROI; 1-8 shift it by 10 % of its bounding box (sides, then corners), 9-12
-    scale it by 0.8, 0.9, 1.1 and 1.2 about its centre (OTB's SRE), keeping its angle."""
+    scale it by 0.8, 0.9, 1.1 and 1.2 about its centre (OTB's SRE), keeping its angle; 13-32 are 20 more."""
     roi = Ellipse(100.0, 80.0, 20.0, 10.0, 0.0)  # bounding box 40 x 20 px
     assert start_roi(roi, 0) == roi
     centres = [start_roi(roi, k).centre for k in range(1, 9)]
@@ -271,8 +271,13 @@ def test_start_rois_are_otbs_spatial_robustness_starts():
     tilted = Ellipse(100.0, 80.0, 20.0, 10.0, 90.0)  # axis a upright: bounding box 20 x 40 px
     moved = start_roi(tilted, 8)
     assert moved.centre == pytest.approx((102, 84)) and moved.angle_deg == 90.0
-    with pytest.raises(UsageError, match="start 13 is not one of 0 to 12"):
-        start_roi(roi, 13)
+    # 13-32: more starts of the same kind, within 8 % of the box and 0.9 to 1.1 of its size, all different.
+    more = [start_roi(roi, k) for k in range(13, 33)]
+    assert all(abs(e.cx - 100) <= 0.08 * 40 and abs(e.cy - 80) <= 0.08 * 20 and 0.9 <= e.a / 20 <= 1.1
+               and e.b / e.a == pytest.approx(0.5) and e.angle_deg == 0.0 for e in more)
+    assert len({(e.cx, e.cy, e.a) for e in more}) == 20
+    with pytest.raises(UsageError, match="start 33 is not one of 0 to 32"):
+        start_roi(roi, 33)
 
 
 def test_bench_from_several_starts_gives_their_mean(dataset):
@@ -290,6 +295,44 @@ def test_bench_from_several_starts_gives_their_mean(dataset):
     assert [r["starts"] for r in doc["results"]] == [3, 3]
     assert doc["results"][0]["auc"] == pytest.approx(merged["auc"])
     assert res.stderr.startswith("Means over 3 starts per sequence")
+
+
+def test_paired_differences_are_start_by_start_with_their_standard_error():
+    results = [{"sequence": "a", "tracker": "x", "auc_per_start": [0.5, 0.6, 0.7, 0.9]},
+               {"sequence": "a", "tracker": "y", "auc_per_start": [0.4, 0.4, 0.4, float("nan")]},
+               {"sequence": "b", "tracker": "x", "auc_per_start": [0.5, 0.5, 0.5, 0.5]},
+               {"sequence": "b", "tracker": "y", "auc_per_start": [0.6, 0.4, 0.5, 0.5]}]
+    [p] = paired_differences(results, ["x", "y"])
+    se = 0.1 / math.sqrt(3)  # a: differences 0.1, 0.2, 0.3 (the failed start 3 left out), sample std 0.1
+    assert p["tracker"] == "y" and p["against"] == "x"
+    assert p["sequences"]["a"] == {"difference": pytest.approx(0.2), "standard_error": pytest.approx(se),
+                                   "starts": 3}
+    se_b = math.sqrt(0.02 / 3) / 2  # b: -0.1, 0.1, 0, 0
+    assert p["sequences"]["b"]["difference"] == pytest.approx(0.0, abs=1e-12)
+    assert p["sequences"]["b"]["standard_error"] == pytest.approx(se_b)
+    assert p["difference"] == pytest.approx(0.1)
+    assert p["standard_error"] == pytest.approx(math.sqrt(se ** 2 + se_b ** 2) / 2)
+    assert (p["ahead"], p["level"], p["behind"]) == (1, 1, 0)  # a: 0.2 > 2 x 0.058; b: 0 within
+    assert paired_differences(results, ["x"]) == []
+    text = format_paired([p]).splitlines()
+    assert text[0].startswith("x minus each tracker")
+    assert text[3].split() == ["a", "+0.200", "±", "0.058"] and text[-1].split() == ["ahead/level/behind", "1/1/0"]
+
+
+def test_bench_from_several_starts_compares_the_first_tracker_with_the_others(dataset):
+    res = _run("bench", "--dataset", dataset, "--trackers", "fixed,diffdecomp,cv-mil", "--starts", "2", "--json",
+               "-", "-q")
+    assert res.exit_code == 0, res.stderr
+    doc = json.loads(res.stdout)
+    assert [(p["against"], p["tracker"]) for p in doc["paired"]] == [("fixed", "diffdecomp"), ("fixed", "cv-mil")]
+    auc = {(r["sequence"], r["tracker"]): r["auc_per_start"] for r in doc["results"]}
+    for p in doc["paired"]:
+        for name, seq in p["sequences"].items():
+            mine, theirs = auc[(name, "fixed")], auc[(name, p["tracker"])]
+            assert seq["difference"] == pytest.approx((mine[0] - theirs[0] + mine[1] - theirs[1]) / 2)
+    assert "fixed minus each tracker" in res.stderr and "ahead/level/behind" in res.stderr
+    one = _run("bench", "--dataset", dataset, "--trackers", "fixed,diffdecomp", "--json", "-", "-q")
+    assert json.loads(one.stdout)["paired"] == [] and "minus each tracker" not in one.stderr
 
 
 def _otb_folder(root: Path, name: str, poses: list[Pose], roi: Ellipse) -> Path:
@@ -338,7 +381,7 @@ SPEED_TAKES_NO = ("no --dataset, --per-frame, --plot, --starts, --backwards, --t
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--starts", "14"], "1<=x<=13"),
+    (["--starts", "34"], "1<=x<=33"),
     (["--starts", "2", "--speed"], SPEED_TAKES_NO),
     (["--backwards", "--speed"], SPEED_TAKES_NO),
     (["--threads", "2", "--speed"], SPEED_TAKES_NO),

@@ -8,8 +8,9 @@ from pathlib import Path
 
 import click
 
-from ..bench import (STARTS, bench_document, collect_sequences, default_dataset, eval_document, format_table,
-                     matplotlib_missing, plot_curves, resolve_trackers, run_bench, summarise, write_text_atomic)
+from ..bench import (STARTS, bench_document, collect_sequences, default_dataset, eval_document, format_paired,
+                     format_table, matplotlib_missing, paired_differences, plot_curves, resolve_trackers, run_bench,
+                     summarise, write_text_atomic)
 from ..errors import UsageError
 from ..executor import TRACKING_OPENCV_THREADS
 from ..look import PLOT_SUFFIXES, check_image_suffix
@@ -76,7 +77,8 @@ Examples:
 @click.option("--starts", type=click.IntRange(min=1, max=len(STARTS)), default=1, show_default=True, metavar="N",
               help=f"Track each sequence from N initial ROIs: the ground truth's, then OTB's spatial robustness "
                    f"(SRE) ones: shifted by 10 % of the box (4 to the sides, 4 to the corners), scaled by 0.8, "
-                   f"0.9, 1.1, 1.2 (at most {len(STARTS)}). Each row is the mean over its starts.")
+                   f"0.9, 1.1, 1.2; from 14 on, fixed random ones (shifts within 8 %, scales 0.9 to 1.1; at most "
+                   f"{len(STARTS)}). Each row is the mean over its starts.")
 @click.option("--backwards", is_flag=True,
               help="Play each sequence backwards instead, from its last frame with ground truth (image sequences "
                    "only; rows named NAME-backwards): the same footage as other tracking problems, a check on "
@@ -166,10 +168,13 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
                   "tracker_params": {name: chosen for name, chosen in tuning.items() if chosen},
                   "start_perturbations": [list(p) for p in STARTS[:starts]]}
     failed = [r for r in results if r["error"]]
+    paired = paired_differences(results, names) if starts > 1 else []
     doc = None if json_out is None else bench_document(results, summary, sequences, parameters=parameters,
-                                                       skipped=skipped, per_frame=per_frame)
+                                                       skipped=skipped, per_frame=per_frame, paired=paired)
     if starts > 1:
         table = f"Means over {starts} starts per sequence (--starts; per-start AUCs in --json).\n" + table
+        if paired:
+            table += "\n" + format_paired(paired)
     _emit(table, doc, json_out)
     if plot_out is not None:
         plot_curves(summary, plot_out)

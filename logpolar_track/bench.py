@@ -391,14 +391,19 @@ def format_table(results: list[dict], summary: list[dict], *, speed: bool = True
         n_seq = max(s["sequences"] for s in summary)
         for s in summary:
             rows.append([f"mean ({n_seq})", s["tracker"]] + [_cell(s.get(key), fmt) for _, key, fmt in columns])
+    return _aligned(header, rows, left=2)
+
+
+def _aligned(header: list[str], rows: list, left: int) -> str:
+    """Plain-text table of ``rows`` (lists of strings; None draws a rule) under ``header``: columns as wide as
+    their widest cell, the first ``left`` of them left-aligned and the others right-aligned."""
     widths = [max(len(header[i]), *(len(r[i]) for r in rows if r)) for i in range(len(header))]
 
     def line(cells):
-        return "  ".join(c.ljust(w) if i < 2 else c.rjust(w) for i, (c, w) in enumerate(zip(cells, widths)))
+        return "  ".join(c.ljust(w) if i < left else c.rjust(w) for i, (c, w) in enumerate(zip(cells, widths)))
 
-    out = [line(header), line(["-" * w for w in widths])]
-    out += [line(r) if r else line(["-" * w for w in widths]) for r in rows]
-    return "\n".join(out) + "\n"
+    rule = line(["-" * w for w in widths])
+    return "\n".join([line(header), rule] + [line(r) if r else rule for r in rows]) + "\n"
 
 
 def paired_differences(results: list[dict], trackers: list[str]) -> list[dict]:
@@ -466,16 +471,9 @@ def format_paired(paired: list[dict]) -> str:
     rows.append(None)
     rows.append([f"mean ({len(names)})"] + [cell(p["difference"], p["standard_error"]) for p in paired])
     rows.append(["ahead/level/behind"] + [f"{p['ahead']}/{p['level']}/{p['behind']}" for p in paired])
-    widths = [max(len(header[i]), *(len(r[i]) for r in rows if r)) for i in range(len(header))]
-
-    def line(cells):
-        return "  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(cells, widths)))
-
     title = (f"{paired[0]['against']} minus each tracker, AUC from the same starts (mean ± standard error over "
-             f"starts; ahead/behind: beyond two):")
-    out = [title, line(header), line(["-" * w for w in widths])]
-    out += [line(r) if r else line(["-" * w for w in widths]) for r in rows]
-    return "\n".join(out) + "\n"
+             f"starts; ahead/behind: beyond two):\n")
+    return title + _aligned(header, rows, left=1)
 
 
 def _opencv_flavour() -> str:

@@ -610,9 +610,9 @@ def matplotlib_missing() -> str | None:
     return None
 
 
-def plot_curves(summary: list[dict], path) -> None:
+def plot_curves(summary: list[dict], path, caption: str | None = None) -> None:
     """Save OTB-style success (IoU) and precision (centre error) plots, one curve per tracker, as a PNG (or PDF
-    or SVG, as ``path`` ends).
+    or SVG, as ``path`` ends), under ``caption`` if given (what was run, e.g. "7 sequences played backwards").
 
     The legend gives each tracker's success AUC and precision at 20 px (means over sequences).
 
@@ -652,6 +652,8 @@ def plot_curves(summary: list[dict], path) -> None:
     for ax in (ax_s, ax_p):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="lower left" if ax is ax_s else "lower right")
+    if caption:
+        fig.suptitle(caption, fontsize=10)
     fig.tight_layout()
     tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
     try:

@@ -543,6 +543,30 @@ def test_plot_gives_a_tracker_one_colour_in_both_panels(tmp_path, monkeypatch):
     assert colours["Success plot"]["a"] != colours["Success plot"]["b"]
 
 
+def test_plot_says_what_was_run(dataset, tmp_path, monkeypatch):
+    """A plot of a run played backwards, or from several starts, looked like a plain run's: its caption says."""
+    pytest.importorskip("matplotlib")
+    from matplotlib.figure import Figure
+
+    captions = []
+
+    def record(figure, path, **kwargs):
+        Path(path).write_bytes(b"")
+        captions.append(figure._suptitle.get_text() if figure._suptitle else None)
+
+    monkeypatch.setattr(Figure, "savefig", record)
+    for extra in ([], ["--starts", "2"]):
+        res = _run("bench", "--dataset", dataset, "--trackers", "fixed", "--plot", tmp_path / "p.png", "--overwrite",
+                   "-q", *extra)
+        assert res.exit_code == 0, res.stderr
+    roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
+    _otb_folder(tmp_path / "otb", "still", [Pose(60.0, 70.0, 1.0, 0.0)] * 4, roi)
+    res = _run("bench", "--dataset", tmp_path / "otb", "--trackers", "fixed", "--backwards", "--plot",
+               tmp_path / "p.png", "--overwrite", "-q")
+    assert res.exit_code == 0, res.stderr
+    assert captions == ["2 sequences", "2 sequences, means over 2 starts", "1 sequence played backwards"]
+
+
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_videos"
 
 

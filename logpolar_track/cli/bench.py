@@ -177,7 +177,11 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
             table += "\n" + format_paired(paired)
     _emit(table, doc, json_out)
     if plot_out is not None:
-        plot_curves(summary, plot_out)
+        # Which run a plot shows is not in its curves: say it, as the table's row names do.
+        caption = f"{len(sequences)} sequence{'s' if len(sequences) != 1 else ''}"
+        caption += " played backwards" if backwards else ""
+        caption += f", means over {starts} starts" if starts > 1 else ""
+        plot_curves(summary, plot_out, caption)
     for r in failed:
         click.echo(f"lptrack: error: {r['tracker']} failed on {r['sequence']}: {r['error']}", err=True)
     if failed:

@@ -87,7 +87,8 @@ def resolve_trackers(spec: str | None) -> tuple[list[str], list[tuple[str, str]]
 #: and height (x right, y down), scale of both semi-axes about the centre. Start 0 is the ground truth's ROI; 1-12
 #: are OTB's SRE perturbations: 4 centre shifts and 4 corner shifts by 10 % of the box, and scales 0.8, 0.9, 1.1
 #: and 1.2; 13-32 are 20 more, drawn once at random (shifts uniform within 8 % of the box, scales within 0.9 to
-#: 1.1; NumPy's ``default_rng(0)``) and written out, so that every machine and NumPy gets the same: 13 starts
+#: 1.1: ``rng = numpy.random.default_rng(0)``, then ``(rng.uniform(-0.08, 0.08), rng.uniform(-0.08, 0.08),
+#: rng.uniform(0.9, 1.1))`` 20 times) and written out, so that every machine and NumPy gets the same: 13 starts
 #: leave a mean that moves by about 0.01 with chance (a 1 % change of one of lpcf's parameters moves it that much),
 #: and more starts narrow that.
 STARTS = ((0.0, 0.0, 1.0),
@@ -279,7 +280,8 @@ _MEAN_KEYS = ("success_rate", "auc", "iou_mean", "precision_20", "centre_error_m
 def mean_over_starts(runs: list[dict]) -> dict:
     """One result from the runs of a (sequence, tracker) pair from several starts: the mean of each score and
     curve over the runs that scored frames, updates, lost frames and update time summed (frames/s over all the
-    runs), ``starts`` (how many runs) and ``auc_per_start``; the frame counts and per-frame arrays are the first
+    runs), ``starts`` (how many runs), ``auc_per_start`` and ``failed_starts`` (those that stopped on an error,
+    scored on the frames before it); the frame counts and per-frame arrays are the first
     run's (the ground truth's start). ``error`` is the first failed run's, naming its start."""
     merged = dict(runs[0])
     scored = [r for r in runs if r["frames_scored"]]
@@ -295,6 +297,7 @@ def mean_over_starts(runs: list[dict]) -> dict:
     merged["fps"] = merged["updates"] / merged["update_time_s"] if merged["update_time_s"] > 0 else math.nan
     merged["starts"] = len(runs)
     merged["auc_per_start"] = [r["auc"] for r in runs]
+    merged["failed_starts"] = [r["start"] for r in runs if r["error"]]
     failed = [r for r in runs if r["error"]]
     merged["error"] = f"start {failed[0]['start']}: {failed[0]['error']}" if failed else None
     return merged
@@ -406,23 +409,34 @@ def _aligned(header: list[str], rows: list, left: int) -> str:
     return "\n".join([line(header), rule] + [line(r) if r else rule for r in rows]) + "\n"
 
 
+#: Student's t at 97.5 % for 1 to 32 degrees of freedom (two-sided 95 %; SciPy's ``t.ppf(0.975, df)``, rounded):
+#: how many standard errors a mean over n starts must be from 0 to count as ahead or behind. With few starts the
+#: standard error is itself a guess, and two of them called a fifth to a quarter of sequences with no difference
+#: ahead or behind at 2 or 3 starts (a simulation of 300 such sequences).
+_T_975 = (12.71, 4.30, 3.18, 2.78, 2.57, 2.45, 2.36, 2.31, 2.26, 2.23, 2.20, 2.18, 2.16, 2.14, 2.13, 2.12, 2.11, 2.10,
+          2.09, 2.09, 2.08, 2.07, 2.07, 2.06, 2.06, 2.06, 2.05, 2.05, 2.05, 2.04, 2.04, 2.04)
+
+
 def paired_differences(results: list[dict], trackers: list[str]) -> list[dict]:
     """The first of ``trackers`` against each other one, start by start: per sequence, the mean over the starts
     of its AUC minus the other's from the same initial ROI (a paired comparison), and the standard error of that
-    mean; over the sequences, the mean of those and its standard error. Empty with one start or one tracker.
+    mean; over the sequences, the mean of those and its standard error. Empty with one tracker.
 
-    The standard errors count only the chance of which starts were drawn (a hard sequence's AUC varies by 0.3 or
-    more between OTB's starts), treating the sequences as fixed: they say whether a difference on these sequences
-    would hold with other starts, not whether it would hold on other sequences.
+    The standard errors treat the starts as a random sample of initial ROIs (OTB's 12 are fixed perturbations,
+    the 20 after them drawn at random) and the sequences as fixed: they say whether a difference on these
+    sequences would hold from other starts, not whether it would hold on other footage. A start that failed for
+    either tracker (an exception partway, scored on the frames before it) is left out.
 
     Returns
     -------
     list of dict
         One per other tracker: ``tracker``, ``against`` (the first tracker), ``difference`` and
-        ``standard_error`` (AUC, over the sequences: the mean of theirs and ``sqrt(sum of squares) / n``),
-        ``ahead``, ``level`` and ``behind`` (how many sequences the first tracker is ahead on by more than two
-        standard errors, within them, behind by more), and ``sequences``: ``{name: {"difference",
-        "standard_error", "starts"}}`` (starts where both runs scored frames; standard error None with one).
+        ``standard_error`` (AUC, over the sequences compared: the mean of theirs and ``sqrt(sum of squares) /
+        n``; None where none could be compared, or, for the error, where one sequence has a single start),
+        ``ahead``, ``level``, ``behind`` and ``undecided`` (sequences where the first tracker is ahead or behind
+        by more than Student's t at 95 % times the standard error, within that, or with one start only), and
+        ``sequences``: ``{name: {"difference", "standard_error", "starts"}}`` (starts compared; standard error
+        None with one).
     """
     if len(trackers) < 2:
         return []
@@ -431,37 +445,46 @@ def paired_differences(results: list[dict], trackers: list[str]) -> list[dict]:
     first = trackers[0]
     out = []
     for other in trackers[1:]:
-        sequences = {}
+        sequences, verdicts = {}, []
         for name in names:
             mine, theirs = by_pair.get((name, first)), by_pair.get((name, other))
             if mine is None or theirs is None or "auc_per_start" not in mine or "auc_per_start" not in theirs:
                 continue
-            d = np.array([a - b for a, b in zip(mine["auc_per_start"], theirs["auc_per_start"])
-                          if a is not None and b is not None and math.isfinite(a) and math.isfinite(b)])
+            failed = set(mine.get("failed_starts", ())) | set(theirs.get("failed_starts", ()))
+            d = np.array([a - b for k, (a, b) in enumerate(zip(mine["auc_per_start"], theirs["auc_per_start"]))
+                          if k not in failed and a is not None and b is not None
+                          and math.isfinite(a) and math.isfinite(b)])
             if d.size == 0:
                 continue
             se = float(d.std(ddof=1) / math.sqrt(d.size)) if d.size > 1 else None
             sequences[name] = {"difference": float(d.mean()), "standard_error": se, "starts": int(d.size)}
-        if not sequences:
-            continue
-        diffs = [s["difference"] for s in sequences.values()]
+            if se is None:
+                verdicts.append("undecided")
+            elif abs(d.mean()) <= _T_975[min(d.size - 1, len(_T_975)) - 1] * se:
+                verdicts.append("level")
+            else:
+                verdicts.append("ahead" if d.mean() > 0 else "behind")
         errors = [s["standard_error"] for s in sequences.values()]
-        known = all(e is not None for e in errors)
-        se = math.sqrt(sum(e * e for e in errors)) / len(errors) if known else None
-        verdicts = [0 if e is None or abs(d) <= 2 * e else (1 if d > 0 else -1) for d, e in zip(diffs, errors)]
-        out.append({"tracker": other, "against": first, "difference": float(np.mean(diffs)), "standard_error": se,
-                    "ahead": verdicts.count(1), "level": verdicts.count(0), "behind": verdicts.count(-1),
+        known = bool(errors) and all(e is not None for e in errors)
+        out.append({"tracker": other, "against": first,
+                    "difference": float(np.mean([s["difference"] for s in sequences.values()])) if sequences else None,
+                    "standard_error": math.sqrt(sum(e * e for e in errors)) / len(errors) if known else None,
+                    **{v: verdicts.count(v) for v in ("ahead", "level", "behind", "undecided")},
                     "sequences": sequences})
     return out
 
 
 def format_paired(paired: list[dict]) -> str:
     """:func:`paired_differences` as plain text: a column per other tracker, a row per sequence, then the mean
-    and the count of sequences ahead / level / behind; empty if there is nothing to compare."""
+    (with the number of sequences it is over, where a column has fewer than the rows) and the count of sequences
+    ahead / level / behind (/ undecided, if any); empty if there is nothing to compare."""
     if not paired:
         return ""
 
     def cell(d, se):
+        if d is None:
+            return "n/a"
+        d = 0.0 if round(d, 3) == 0 else d  # no "-0.000"
         return f"{d:+.3f}" + ("" if se is None else f" ± {se:.3f}")
 
     names = list(dict.fromkeys(n for p in paired for n in p["sequences"]))
@@ -469,10 +492,14 @@ def format_paired(paired: list[dict]) -> str:
     rows = [[n] + [cell(p["sequences"][n]["difference"], p["sequences"][n]["standard_error"])
                    if n in p["sequences"] else "n/a" for p in paired] for n in names]
     rows.append(None)
-    rows.append([f"mean ({len(names)})"] + [cell(p["difference"], p["standard_error"]) for p in paired])
-    rows.append(["ahead/level/behind"] + [f"{p['ahead']}/{p['level']}/{p['behind']}" for p in paired])
-    title = (f"{paired[0]['against']} minus each tracker, AUC from the same starts (mean ± standard error over "
-             f"starts; ahead/behind: beyond two):\n")
+    rows.append([f"mean ({len(names)})"] + [
+        cell(p["difference"], p["standard_error"])
+        + (f" ({len(p['sequences'])})" if 0 < len(p["sequences"]) < len(names) else "") for p in paired])
+    undecided = any(p["undecided"] for p in paired)
+    rows.append(["ahead/level/behind" + ("/undecided" if undecided else "")] + [
+        f"{p['ahead']}/{p['level']}/{p['behind']}" + (f"/{p['undecided']}" if undecided else "") for p in paired])
+    title = (f"{paired[0]['against']}'s AUC minus each other tracker's, start by start (mean ± standard error over "
+             f"the starts; ahead or behind: beyond Student's t at 95 %):\n")
     return title + _aligned(header, rows, left=1)
 
 

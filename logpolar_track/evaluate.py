@@ -41,8 +41,9 @@ rotation error
     whose rectangles look the same after half a turn so their cumulative rotation is only known up to
     multiples of 180 degrees.
 lost rate
-    Share of scored frames the tracker reported ``lost`` (its ``status``; OpenCV's trackers: ``update`` said not
-    ok). Those frames are scored like the others, with the geometry the tracker reported for them.
+    Share of scored frames (the first, ``init``, included) the tracker reported ``lost`` (its ``status``; OpenCV's
+    trackers: ``update`` said not ok). Those frames are scored like the others, with the geometry the tracker
+    reported for them. Unknown (NaN) for a track without statuses.
 tracked off the object
     Share of the scored frames reported ``tracked`` whose box does not overlap the ground truth at all (IoU 0, VOT's
     failure): how often a frame said to be tracked is not. With the lost rate it says how far ``status`` can be
@@ -642,7 +643,9 @@ def read_track_csv(path) -> Track:
     """Read a run CSV (``frame,time_s,cx,cy,a,b,angle_deg,scale,rotation_deg,score,status``) as predictions.
 
     Empty, ``n/a`` or ``nan`` fields become NaN (e.g. ``rotation_deg`` of trackers that do not measure it);
-    missing ``scale``/``score`` default to 1, a missing ``status`` to ``tracked``.
+    missing ``scale``/``score`` default to 1. Without a ``status`` column (or with it empty throughout: another
+    tool's file) the track has no statuses (``status`` is empty) and its ``lost_rate`` and ``tracked_off_rate`` are
+    NaN; an empty field among others is ``tracked``.
 
     Raises
     ------
@@ -681,6 +684,8 @@ def read_track_csv(path) -> Track:
             column, what = broken
             text = value if column == "status" else row.get("score")
             raise GroundTruthError(f"run CSV '{path}' line {line}: {column} '{text}' is not {what}")
+    if "status" not in header or not any((r.get("status") or "").strip() for r in rows):
+        status = []  # not said: how often it was lost, or wrong while tracked, is not known
     return Track(frames, ell, scale, rot, score, status)
 
 

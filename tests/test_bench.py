@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from logpolar_track.bench import format_paired, paired_differences, run_bench, run_one, start_roi
+from logpolar_track.bench import format_paired, mean_over_starts, paired_differences, run_bench, run_one, start_roi
 from logpolar_track.errors import UsageError
 from logpolar_track.cli import main
 from logpolar_track.datasets import discover
@@ -298,25 +298,52 @@ def test_bench_from_several_starts_gives_their_mean(dataset):
 
 
 def test_paired_differences_are_start_by_start_with_their_standard_error():
-    results = [{"sequence": "a", "tracker": "x", "auc_per_start": [0.5, 0.6, 0.7, 0.9]},
-               {"sequence": "a", "tracker": "y", "auc_per_start": [0.4, 0.4, 0.4, float("nan")]},
+    results = [{"sequence": "a", "tracker": "x", "auc_per_start": [0.5, 0.6, 0.7, 0.6, 0.9]},
+               {"sequence": "a", "tracker": "y", "auc_per_start": [0.4, 0.4, 0.4, 0.4, 0.4], "failed_starts": [4]},
                {"sequence": "b", "tracker": "x", "auc_per_start": [0.5, 0.5, 0.5, 0.5]},
-               {"sequence": "b", "tracker": "y", "auc_per_start": [0.6, 0.4, 0.5, 0.5]}]
+               {"sequence": "b", "tracker": "y", "auc_per_start": [0.4, 0.5, 0.3, float("nan")]},
+               {"sequence": "c", "tracker": "x", "auc_per_start": [0.7]},
+               {"sequence": "c", "tracker": "y", "auc_per_start": [0.2]}]
     [p] = paired_differences(results, ["x", "y"])
-    se = 0.1 / math.sqrt(3)  # a: differences 0.1, 0.2, 0.3 (the failed start 3 left out), sample std 0.1
     assert p["tracker"] == "y" and p["against"] == "x"
-    assert p["sequences"]["a"] == {"difference": pytest.approx(0.2), "standard_error": pytest.approx(se),
-                                   "starts": 3}
-    se_b = math.sqrt(0.02 / 3) / 2  # b: -0.1, 0.1, 0, 0
-    assert p["sequences"]["b"]["difference"] == pytest.approx(0.0, abs=1e-12)
-    assert p["sequences"]["b"]["standard_error"] == pytest.approx(se_b)
-    assert p["difference"] == pytest.approx(0.1)
-    assert p["standard_error"] == pytest.approx(math.sqrt(se ** 2 + se_b ** 2) / 2)
-    assert (p["ahead"], p["level"], p["behind"]) == (1, 1, 0)  # a: 0.2 > 2 x 0.058; b: 0 within
+    # a: 0.1, 0.2, 0.3, 0.2 (start 4 failed for y: left out), standard error 0.041: 4.9 of them, beyond t(3) = 3.18.
+    se_a = math.sqrt(0.02 / 3) / 2
+    assert p["sequences"]["a"] == {"difference": pytest.approx(0.2), "standard_error": pytest.approx(se_a),
+                                   "starts": 4}
+    # b: 0.1, 0, 0.2 (NaN left out), standard error 0.058: 3.5 of them, within t(2) = 4.30 (beyond 2).
+    assert p["sequences"]["b"]["difference"] == pytest.approx(0.1)
+    assert p["sequences"]["b"]["standard_error"] == pytest.approx(0.1 / math.sqrt(3))
+    # c: one start, no standard error: undecided, and the mean over the sequences has none either.
+    assert p["sequences"]["c"] == {"difference": pytest.approx(0.5), "standard_error": None, "starts": 1}
+    assert p["difference"] == pytest.approx(0.8 / 3) and p["standard_error"] is None
+    assert (p["ahead"], p["level"], p["behind"], p["undecided"]) == (1, 1, 0, 1)
     assert paired_differences(results, ["x"]) == []
     text = format_paired([p]).splitlines()
-    assert text[0].startswith("x minus each tracker")
-    assert text[3].split() == ["a", "+0.200", "±", "0.058"] and text[-1].split() == ["ahead/level/behind", "1/1/0"]
+    assert text[0].startswith("x's AUC minus each other tracker's")
+    assert text[3].split() == ["a", "+0.200", "±", "0.041"] and text[5].split() == ["c", "+0.500"]
+    assert text[-2].split() == ["mean", "(3)", "+0.267"]
+    assert text[-1].split() == ["ahead/level/behind/undecided", "1/1/0/1"]
+    # Without sequence a for another tracker z (it failed on every start there), its mean says it is over 2.
+    results += [{"sequence": "a", "tracker": "z", "auc_per_start": [0.1] * 5, "failed_starts": list(range(5))},
+                {"sequence": "b", "tracker": "z", "auc_per_start": [0.5, 0.5, 0.5, 0.5]},
+                {"sequence": "c", "tracker": "z", "auc_per_start": [0.7]}]
+    _, z = paired_differences(results, ["x", "y", "z"])
+    assert list(z["sequences"]) == ["b", "c"] and z["difference"] == pytest.approx(0.0)
+    text = format_paired([p, z]).splitlines()
+    assert text[3].split()[-1] == "n/a" and text[-2].split()[-2:] == ["+0.000", "(2)"]
+
+
+def test_mean_over_starts_averages_the_status_rates_and_names_failed_starts():
+    def run(start, lost, off, error=None):
+        return {"sequence": "s", "tracker": "t", "start": start, "frames_scored": 10, "success_rate": 1.0, "auc": 0.5,
+                "iou_mean": 0.5, "precision_20": 1.0, "centre_error_median_px": 1.0, "scale_error_median_pct": 1.0,
+                "rotation_error_median_deg": None, "lost_rate": lost, "tracked_off_rate": off,
+                "success_curve": [1.0] * 21, "precision_curve": [1.0] * 51, "updates": 9, "lost_frames": 0,
+                "update_time_s": 0.1, "error": error}
+
+    merged = mean_over_starts([run(0, 0.1, 0.0), run(1, 0.3, 0.5, "ValueError: x"), run(2, 0.2, float("nan"))])
+    assert merged["lost_rate"] == pytest.approx(0.2) and merged["tracked_off_rate"] == pytest.approx(0.25)
+    assert merged["failed_starts"] == [1] and merged["error"] == "start 1: ValueError: x"
 
 
 def test_bench_from_several_starts_compares_the_first_tracker_with_the_others(dataset):
@@ -330,9 +357,9 @@ def test_bench_from_several_starts_compares_the_first_tracker_with_the_others(da
         for name, seq in p["sequences"].items():
             mine, theirs = auc[(name, "fixed")], auc[(name, p["tracker"])]
             assert seq["difference"] == pytest.approx((mine[0] - theirs[0] + mine[1] - theirs[1]) / 2)
-    assert "fixed minus each tracker" in res.stderr and "ahead/level/behind" in res.stderr
+    assert "fixed's AUC minus each other tracker's" in res.stderr and "ahead/level/behind" in res.stderr
     one = _run("bench", "--dataset", dataset, "--trackers", "fixed,diffdecomp", "--json", "-", "-q")
-    assert json.loads(one.stdout)["paired"] == [] and "minus each tracker" not in one.stderr
+    assert json.loads(one.stdout)["paired"] == [] and "minus each other" not in one.stderr
 
 
 def _otb_folder(root: Path, name: str, poses: list[Pose], roi: Ellipse) -> Path:

@@ -40,9 +40,9 @@ Columns (per sequence and tracker; 'mean' rows average over sequences):
   scale_err%   median |scale / true scale - 1|
   rot_err_deg  median rotation error (ground truth with an angle only;
                modulo 180 for rectangles); n/a for OpenCV's trackers
-  lost%        frames reported lost
-  off_tracked% frames reported tracked whose box misses the object
-               (IoU 0): how often 'tracked' is wrong
+  lost%        share of the scored frames reported lost
+  off_tracked% share of the frames reported tracked whose box misses the
+               object (IoU 0): how often 'tracked' is wrong
   fps          tracker update() calls per second (decoding excluded)
 
 \b
@@ -77,8 +77,9 @@ Examples:
 @click.option("--starts", type=click.IntRange(min=1, max=len(STARTS)), default=1, show_default=True, metavar="N",
               help=f"Track each sequence from N initial ROIs: the ground truth's, then OTB's spatial robustness "
                    f"(SRE) ones: shifted by 10 % of the box (4 to the sides, 4 to the corners), scaled by 0.8, "
-                   f"0.9, 1.1, 1.2; from 14 on, fixed random ones (shifts within 8 %, scales 0.9 to 1.1; at most "
-                   f"{len(STARTS)}). Each row is the mean over its starts.")
+                   f"0.9, 1.1, 1.2; from the 14th on, fixed random ones (shifts within 8 %, scales 0.9 to 1.1; at "
+                   f"most {len(STARTS)}). Each row is the mean over its starts; with several trackers a second "
+                   f"table gives the first one's AUC minus each other's, start by start, with its standard error.")
 @click.option("--backwards", is_flag=True,
               help="Play each sequence backwards instead, from its last frame with ground truth (image sequences "
                    "only; rows named NAME-backwards): the same footage as other tracking problems, a check on "
@@ -100,7 +101,9 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
 
     Prints one row per sequence and tracker and a mean row per tracker:
     success rate, IoU success AUC, precision at 20 px, median centre, scale
-    and rotation errors, and tracker frames/s.
+    and rotation errors, how often it said lost and how often 'tracked' was
+    wrong, and tracker frames/s. With --starts N > 1 and several trackers,
+    then the first tracker's AUC minus each other's, start by start.
 
     With --speed: each tracker's ms/frame on circle and ellipse next to the
     thesis' Table 4.1, decode and decode + encode baselines, and 'lptrack run'
@@ -279,7 +282,8 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, ove
     matched by index (line k of a .txt file is frame k-1); the metrics are
     those of 'lptrack bench' (see 'lptrack bench --help'). A .gt.csv
     without a rotation_deg column has its rotation scored modulo 180
-    degrees (an ellipse's angle repeats every half turn).
+    degrees (an ellipse's angle repeats every half turn). A CSV without a
+    status column has no lost% or off_tracked% (n/a).
     """
     from ..datasets import load_ground_truth
     from ..evaluate import read_track_csv, score_track

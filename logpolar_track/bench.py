@@ -180,7 +180,8 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
     -------
     dict
         ``sequence``, ``tracker``, ``start``, ``frames`` (decoded), ``updates`` (frames passed to ``update``),
-        ``lost_frames``, ``update_time_s``, ``fps`` (updates per second of update time), ``error`` (None, or
+        ``lost_frames`` (updates reported lost, with ground truth or not; ``lost_rate`` is the share of the scored
+        frames), ``update_time_s``, ``fps`` (updates per second of update time), ``error`` (None, or
         the message of an exception that stopped the run; then the numbers cover the frames before it), and
         every key of :func:`~logpolar_track.evaluate.score_track`.
     """
@@ -274,7 +275,7 @@ def run_bench(sequences: list[Sequence], trackers: list[str], *, params: Mapping
 
 #: Per-run numbers that :func:`mean_over_starts` averages (the rest are summed, or kept from the first run).
 _MEAN_KEYS = ("success_rate", "auc", "iou_mean", "precision_20", "centre_error_median_px", "scale_error_median_pct",
-              "rotation_error_median_deg", "lost_rate", "tracked_off_rate")
+              "rotation_error_median_deg", "lost_rate", "off_tracked_rate")
 
 
 def mean_over_starts(runs: list[dict]) -> dict:
@@ -338,7 +339,7 @@ def summarise(results: list[dict], trackers: list[str]) -> list[dict]:
             "scale_error_median_pct": _mean(r["scale_error_median_pct"] for r in rs),
             "rotation_error_median_deg": _mean(r["rotation_error_median_deg"] for r in rs),
             "lost_rate": _mean(r["lost_rate"] for r in rs),
-            "tracked_off_rate": _mean(r["tracked_off_rate"] for r in rs),
+            "off_tracked_rate": _mean(r["off_tracked_rate"] for r in rs),
             "fps": updates / time_s if time_s > 0 else None,
             "success_curve": succ.tolist(),
             "success_curve_auc": auc(succ) if curves else None,
@@ -361,7 +362,7 @@ _COLUMNS = (  # header, key, format: fraction shown as percent ("pct"), or a for
     ("scale_err%", "scale_error_median_pct", ".1f"),
     ("rot_err_deg", "rotation_error_median_deg", ".1f"),
     ("lost%", "lost_rate", "pct"),
-    ("off_tracked%", "tracked_off_rate", "pct"),
+    ("off_tracked%", "off_tracked_rate", "pct"),
     ("fps", "fps", ".1f"),
 )
 

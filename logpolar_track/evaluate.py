@@ -644,7 +644,7 @@ def read_track_csv(path) -> Track:
 
     Empty, ``n/a`` or ``nan`` fields become NaN (e.g. ``rotation_deg`` of trackers that do not measure it);
     missing ``scale``/``score`` default to 1. Without a ``status`` column (or with it empty throughout: another
-    tool's file) the track has no statuses (``status`` is empty) and its ``lost_rate`` and ``tracked_off_rate`` are
+    tool's file) the track has no statuses (``status`` is empty) and its ``lost_rate`` and ``off_tracked_rate`` are
     NaN; an empty field among others is ``tracked``.
 
     Raises
@@ -787,7 +787,7 @@ def score_track(gt: GroundTruth, track: Track) -> dict:
     dict
         ``frames_scored``, ``frames_missing``, ``success_rate`` (fraction), ``auc``, ``iou_mean``,
         ``precision_20`` (fraction), ``centre_error_median_px``, ``scale_error_median_pct``,
-        ``rotation_error_median_deg`` (None where not measurable), ``lost_rate`` and ``tracked_off_rate``
+        ``rotation_error_median_deg`` (None where not measurable), ``lost_rate`` and ``off_tracked_rate``
         (fractions; NaN where the track has no ``status``, or no frame scored is reported tracked),
         ``success_curve`` (21 values), ``precision_curve`` (51 values), and per-frame ``frames``, ``iou``,
         ``centre_error_px``. Undefined numbers are NaN.
@@ -819,13 +819,13 @@ def score_track(gt: GroundTruth, track: Track) -> dict:
 
     scale_med = math.nan
     rot_med = None
-    lost_rate = tracked_off_rate = math.nan
+    lost_rate = off_tracked_rate = math.nan
     if rows.size and len(track.status) == len(track.frames):
         status = np.array(track.status, dtype=object)[rows]
         lost_rate = float(np.mean(status == "lost"))
         tracked = status == "tracked"
         if tracked.any():
-            tracked_off_rate = float(np.mean(np.nan_to_num(iou[tracked]) <= 0.0))
+            off_tracked_rate = float(np.mean(np.nan_to_num(iou[tracked]) <= 0.0))
     if rows.size:
         ps = track.scale[rows] / track.scale[rows[0]]
         gs = gt.scale[frames] / gt.scale[frames[0]]
@@ -847,7 +847,7 @@ def score_track(gt: GroundTruth, track: Track) -> dict:
         "scale_error_median_pct": scale_med,
         "rotation_error_median_deg": rot_med,
         "lost_rate": lost_rate,
-        "tracked_off_rate": tracked_off_rate,
+        "off_tracked_rate": off_tracked_rate,
         "success_curve": curve.tolist(),
         "precision_curve": prec.tolist(),
         "frames": frames.tolist(),

@@ -108,11 +108,11 @@ def test_bench_reports_how_often_tracked_is_wrong(dataset, oracle, monkeypatch):
     doc = json.loads(res.stdout)
     for r in doc["results"]:
         if r["tracker"] == oracle:
-            assert r["lost_rate"] == 0 and r["tracked_off_rate"] == 0
+            assert r["lost_rate"] == 0 and r["off_tracked_rate"] == 0
         else:  # 12 frames: the first is the start, frame 3 lost, frames 6 to 11 (6 of the 10 tracked) off
-            assert r["lost_rate"] == pytest.approx(1 / 12) and r["tracked_off_rate"] == pytest.approx(6 / 10)
+            assert r["lost_rate"] == pytest.approx(1 / 12) and r["off_tracked_rate"] == pytest.approx(6 / 10)
     summary = {s["tracker"]: s for s in doc["summary"]}
-    assert summary[_Boaster.name]["tracked_off_rate"] == pytest.approx(0.6)
+    assert summary[_Boaster.name]["off_tracked_rate"] == pytest.approx(0.6)
     table = res.stderr.splitlines()  # with --json -, the table goes to stderr
     header = table[0].split()
     assert header[-3:] == ["lost%", "off_tracked%", "fps"]
@@ -337,12 +337,12 @@ def test_mean_over_starts_averages_the_status_rates_and_names_failed_starts():
     def run(start, lost, off, error=None):
         return {"sequence": "s", "tracker": "t", "start": start, "frames_scored": 10, "success_rate": 1.0, "auc": 0.5,
                 "iou_mean": 0.5, "precision_20": 1.0, "centre_error_median_px": 1.0, "scale_error_median_pct": 1.0,
-                "rotation_error_median_deg": None, "lost_rate": lost, "tracked_off_rate": off,
+                "rotation_error_median_deg": None, "lost_rate": lost, "off_tracked_rate": off,
                 "success_curve": [1.0] * 21, "precision_curve": [1.0] * 51, "updates": 9, "lost_frames": 0,
                 "update_time_s": 0.1, "error": error}
 
     merged = mean_over_starts([run(0, 0.1, 0.0), run(1, 0.3, 0.5, "ValueError: x"), run(2, 0.2, float("nan"))])
-    assert merged["lost_rate"] == pytest.approx(0.2) and merged["tracked_off_rate"] == pytest.approx(0.25)
+    assert merged["lost_rate"] == pytest.approx(0.2) and merged["off_tracked_rate"] == pytest.approx(0.25)
     assert merged["failed_starts"] == [1] and merged["error"] == "start 1: ValueError: x"
 
 

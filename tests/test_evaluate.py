@@ -219,13 +219,13 @@ def test_score_track_says_how_often_tracked_is_wrong():
     assert m["frames_scored"] == 6
     assert m["lost_rate"] == pytest.approx(1 / 6)
     # Of the 4 scored frames reported tracked, one misses the box (frame 2); frame 4 only overlaps it a little.
-    assert m["tracked_off_rate"] == pytest.approx(1 / 4)
+    assert m["off_tracked_rate"] == pytest.approx(1 / 4)
     track.status = []  # a track without statuses (another tool's CSV without the column) has no such figures
     m = score_track(gt, track)
-    assert math.isnan(m["lost_rate"]) and math.isnan(m["tracked_off_rate"])
+    assert math.isnan(m["lost_rate"]) and math.isnan(m["off_tracked_rate"])
     track.status = ["init", "lost", "lost", "lost", "lost", "lost", "lost"]
     m = score_track(gt, track)
-    assert m["lost_rate"] == pytest.approx(5 / 6) and math.isnan(m["tracked_off_rate"])
+    assert m["lost_rate"] == pytest.approx(5 / 6) and math.isnan(m["off_tracked_rate"])
 
 
 # ----------------------------------------------------------------------------------------- readers
@@ -287,12 +287,12 @@ def test_read_gt_csv_and_run_csv(tmp_path):
     assert track.frames.tolist() == [0, 1] and np.isnan(track.rotation_deg).all()
     m = score_track(gt, track)
     assert m["frames_scored"] == 2 and m["centre_error_median_px"] == pytest.approx(0.5)
-    assert m["lost_rate"] == 0.0 and m["tracked_off_rate"] == 0.0
+    assert m["lost_rate"] == 0.0 and m["off_tracked_rate"] == 0.0
     # Another tool's file without statuses (no column, or the column empty): how often it was lost is not known.
     for header, tail in (("frame,cx,cy,a,b,angle_deg", ""), ("frame,cx,cy,a,b,angle_deg,status", ",")):
         run.write_text(f"{header}\n0,50,40,20,10,30{tail}\n1,90,40,20,10,30{tail}\n")
         m = score_track(gt, read_track_csv(run))
-        assert math.isnan(m["lost_rate"]) and math.isnan(m["tracked_off_rate"])
+        assert math.isnan(m["lost_rate"]) and math.isnan(m["off_tracked_rate"])
     (tmp_path / "bad.csv").write_text("frame,cx\n0,1\n")
     with pytest.raises(GroundTruthError, match="lacks column"):
         read_gt_csv(tmp_path / "bad.csv")

@@ -298,8 +298,8 @@ def mean_over_starts(runs: list[dict]) -> dict:
     merged["fps"] = merged["updates"] / merged["update_time_s"] if merged["update_time_s"] > 0 else math.nan
     merged["starts"] = len(runs)
     merged["auc_per_start"] = [r["auc"] for r in runs]
-    merged["failed_starts"] = [r["start"] for r in runs if r["error"]]
     failed = [r for r in runs if r["error"]]
+    merged["failed_starts"] = [r["start"] for r in failed]
     merged["error"] = f"start {failed[0]['start']}: {failed[0]['error']}" if failed else None
     return merged
 
@@ -457,14 +457,15 @@ def paired_differences(results: list[dict], trackers: list[str]) -> list[dict]:
                           and math.isfinite(a) and math.isfinite(b)])
             if d.size == 0:
                 continue
+            mean = float(d.mean())
             se = float(d.std(ddof=1) / math.sqrt(d.size)) if d.size > 1 else None
-            sequences[name] = {"difference": float(d.mean()), "standard_error": se, "starts": int(d.size)}
+            sequences[name] = {"difference": mean, "standard_error": se, "starts": int(d.size)}
             if se is None:
                 verdicts.append("undecided")
-            elif abs(d.mean()) <= _T_975[min(d.size - 1, len(_T_975)) - 1] * se:
+            elif abs(mean) <= _T_975[min(d.size - 1, len(_T_975)) - 1] * se:
                 verdicts.append("level")
             else:
-                verdicts.append("ahead" if d.mean() > 0 else "behind")
+                verdicts.append("ahead" if mean > 0 else "behind")
         errors = [s["standard_error"] for s in sequences.values()]
         known = bool(errors) and all(e is not None for e in errors)
         out.append({"tracker": other, "against": first,

@@ -9,8 +9,9 @@ leaves a file that looks finished.
 Frames are BGR ``uint8`` arrays of shape ``(height, width, 3)`` as OpenCV decodes them. Frame indexes count
 from 0 at the first frame of the file; ``time_s = index / fps`` (the nominal time of a constant-rate video).
 
-An image sequence is read like a video where a file name holds a printf-style frame number, as FFmpeg and
-``cv2.VideoCapture`` take it: ``frames/%04d.png`` is ``frames/0001.png``, ``frames/0002.png``, ... Its frames are
+An image sequence is read like a video where a file name holds a printf-style frame number, as FFmpeg takes it:
+``frames/%04d.png`` (or ``frames/%4d.png``: a width pads with zeros) is ``frames/0001.png``, ``frames/0002.png``,
+... Its frames are
 its images in number order, whatever the first number (FFmpeg and OpenCV look only for 0 to 4), frame 0 the
 lowest; it has no frame rate of its own (``fps_guessed``).
 """
@@ -69,6 +70,14 @@ def _frame_number_field(path: Path) -> re.Match | None:
     return fields[0]
 
 
+def _frame_number_text(field: re.Match, number: int) -> str:
+    """``number`` as the frame-number ``field`` writes it, as FFmpeg does: a width pads with zeros, given or not
+    (``%04d`` and ``%4d``: ``0007``; ``%d``: ``7``). C's printf, and so OpenCV's reader, pads ``%4d`` with spaces,
+    which no numbered image file has."""
+    width = field.group(0)[1:-1]
+    return f"{number:0{int(width)}d}" if width else str(number)
+
+
 def is_image_sequence(path) -> bool:
     """Whether ``path`` names an image sequence (``frames/%04d.png``) rather than a video file."""
     return _frame_number_field(Path(path)) is not None
@@ -76,8 +85,9 @@ def is_image_sequence(path) -> bool:
 
 def image_sequence_files(path) -> list[Path]:
     """The images of image-sequence pattern ``path``, in frame-number order: the files of its folder whose
-    names are the pattern with a number in the field, written as the field writes it (``%04d``: ``0007``,
-    ``12345``; ``%d``: ``7``). A number missing from the run is skipped. Empty if none (or no folder)."""
+    names are the pattern with a number in the field, written as the field writes it (``%04d``, and ``%4d`` as
+    FFmpeg takes it: ``0007``, ``12345``; ``%d``: ``7``). A number missing from the run is skipped. Empty if none (or
+    no folder)."""
     path = Path(path)
     field = _frame_number_field(path)
     if field is None:
@@ -93,7 +103,7 @@ def image_sequence_files(path) -> list[Path]:
     for entry in entries:
         match = named.match(entry.name)
         # The number as the field writes it, so that '%04d' does not also take '7.png' or '00007.png'.
-        if match and field.group(0) % int(match.group(1)) == match.group(1) and entry.is_file():
+        if match and _frame_number_text(field, int(match.group(1))) == match.group(1) and entry.is_file():
             found.append((int(match.group(1)), folder / entry.name))
     return [file for _, file in sorted(found)]
 
@@ -165,7 +175,7 @@ def _not_opened(path: Path) -> VideoError:
     """Why ``path``'s capture did not open (:func:`_open_capture`)."""
     field = _frame_number_field(path)
     if field is not None:  # an image sequence opens unless no image matches
-        example = path.name[:field.start()] + field.group(0) % 1 + path.name[field.end():]
+        example = path.name[:field.start()] + _frame_number_text(field, 1) + path.name[field.end():]
         return VideoError(f"no images match '{path}': {field.group(0)} stands for the frame number, e.g. "
                           f"'{path.parent / example}'")
     return VideoError(f"cannot read '{path}' as a video: OpenCV cannot decode it (not a video, a damaged or "

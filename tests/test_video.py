@@ -549,6 +549,19 @@ def test_an_image_sequence_is_read_in_number_order_whatever_its_first_number(tmp
         assert [(index, int(frame[0, 0, 0])) for index, _, frame in reader] == [(4, 40), (5, 50)]
 
 
+def test_a_width_without_a_zero_pads_with_zeros_as_in_ffmpeg(tmp_path):
+    # FFmpeg writes and reads frame_%4d.png as frame_0001.png (C's printf, and OpenCV, would pad with spaces).
+    pattern = _numbered_images(tmp_path / "shots", [1, 2, 10])
+    spaced = pattern.with_name("frame_%4d.png")
+    assert [path.name for path in video_module.image_sequence_files(spaced)] == \
+        ["frame_0001.png", "frame_0002.png", "frame_0010.png"]
+    with VideoReader(spaced) as reader:
+        assert [int(frame[0, 0, 0]) for _, _, frame in reader] == [0, 10, 20]
+    with pytest.raises(VideoError, match=r"no images match '.*f_%3d.png': %3d stands for the frame number, "
+                                         r"e.g. '.*shots/f_001.png'"):
+        VideoReader(pattern.with_name("f_%3d.png"))
+
+
 def test_grey_and_16_bit_images_are_read_as_8_bit_bgr(tmp_path):
     folder = tmp_path / "shots"
     folder.mkdir()

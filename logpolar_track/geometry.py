@@ -256,6 +256,10 @@ def as_ellipse(roi) -> Ellipse:
         values = np.asarray(roi, dtype=np.float64) if roi is not None else None
     except (TypeError, ValueError):
         values = None
+        if _looks_like_rotated_rect(roi):
+            raise RoiError(f"{roi!r:.60} looks like an OpenCV RotatedRect ((cx, cy), (w, h), angle), whose angle is "
+                           f"clockwise on screen: logpolar_track.geometry.ellipse_from_opencv(rect) is the ellipse "
+                           f"inside it") from None
     if values is None or values.ndim != 1:
         raise RoiError(f"{accepted}; got {type(roi).__name__} {roi!r:.60}")
     if len(values) == 4:
@@ -264,6 +268,15 @@ def as_ellipse(roi) -> Ellipse:
     if len(values) not in (3, 5):
         raise RoiError(f"{accepted}; got {counted(len(values), 'number')}: {_numbers(values)}")
     return parse_roi(",".join(repr(float(v)) for v in values))
+
+
+def _looks_like_rotated_rect(roi) -> bool:
+    """Whether ``roi`` has the shape of an OpenCV ``RotatedRect``: two pairs and a number."""
+    try:
+        centre, size, _ = roi
+        return len(centre) == 2 and len(size) == 2
+    except (TypeError, ValueError):
+        return False
 
 
 def check_roi_fits(roi: Ellipse, width: int, height: int, *, source: str | None = None,
@@ -296,9 +309,26 @@ def ellipse_in_box(x: float, y: float, w: float, h: float) -> Ellipse:
 def ellipse_in_rotated_rect(cx: float, cy: float, w: float, h: float, angle_deg: float) -> Ellipse:
     """The ellipse inscribed in a rotated rectangle.
 
-    ``w`` lies along ``angle_deg`` (degrees counter-clockwise on screen), ``h`` across it.
+    ``w`` lies along ``angle_deg`` (degrees counter-clockwise on screen), ``h`` across it. OpenCV's rotated
+    rectangles measure their angle the other way: for one of those use :func:`ellipse_from_opencv`.
     """
     return Ellipse(cx, cy, w / 2.0, h / 2.0, angle_deg)
+
+
+def ellipse_from_opencv(rotated_rect) -> Ellipse:
+    """The ellipse inscribed in an OpenCV ``RotatedRect`` ``((cx, cy), (w, h), angle)``, as ``cv2.fitEllipse``,
+    ``cv2.minAreaRect`` and ``cv2.CamShift`` return it: e.g. a ROI from a segmented object's contour.
+
+    OpenCV's ``angle`` turns ``w``'s axis from +x towards +y, which with y down is clockwise on screen; lptrack's
+    angles are counter-clockwise, so it is negated (``cv2.ellipse`` and ``cv2.boxPoints`` take it as OpenCV gives it).
+    """
+    try:
+        (cx, cy), (w, h), angle = rotated_rect
+        values = [float(v) for v in (cx, cy, w, h, angle)]
+    except (TypeError, ValueError):
+        raise RoiError(f"an OpenCV RotatedRect is ((cx, cy), (w, h), angle); got {rotated_rect!r:.60}") from None
+    cx, cy, w, h, angle = values
+    return as_ellipse((cx, cy, w / 2.0, h / 2.0, 0.0 - angle))  # 0.0 - 0.0 is 0.0, where -0.0 would show
 
 
 def wrap_degrees(angle: float) -> float:

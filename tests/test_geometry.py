@@ -199,6 +199,8 @@ def test_as_ellipse_takes_what_a_python_user_passes(roi):
     ([[300, 250, 64]], "a ROI is an Ellipse, a string"),
     (object(), "a ROI is an Ellipse, a string"),
     ({"cx": 1}, "a ROI is an Ellipse, a string"),
+    (((300, 250), (120, 70), 20.0), "looks like an OpenCV RotatedRect ((cx, cy), (w, h), angle), whose angle is "
+                                    "clockwise on screen: logpolar_track.geometry.ellipse_from_opencv(rect)"),
 ])
 def test_as_ellipse_says_what_is_accepted(roi, fragment):
     from logpolar_track.geometry import as_ellipse
@@ -210,3 +212,23 @@ def test_as_ellipse_says_what_is_accepted(roi, fragment):
 def test_a_huge_number_is_said_in_exponent_form():
     with pytest.raises(RoiError, match=r"^ROI 300,250,1e\+308 lies mostly outside"):
         check_roi_fits(Ellipse.circle(300, 250, 1e308), 640, 480)
+
+
+def test_an_opencv_rotated_rect_gives_the_ellipse_inside_it_turned_counter_clockwise():
+    import cv2
+
+    from logpolar_track.geometry import ellipse_from_opencv
+
+    # An ellipse turned 20 degrees counter-clockwise on screen: its long axis rises to the right (y down).
+    truth = Ellipse(250, 240, 60, 35, 20)
+    assert truth.axis_end()[1] < truth.cy
+    points = truth.boundary_points(90).astype(np.float32)
+    for rect in (cv2.fitEllipse(points), cv2.minAreaRect(points)):
+        assert ellipse_from_opencv(rect).same_outline(truth, tolerance_px=0.5)
+    # OpenCV's own angle is the other way round: taken as lptrack's, the outline would be mirrored.
+    (cx, cy), (w, h), angle = cv2.fitEllipse(points)
+    assert not Ellipse(cx, cy, w / 2, h / 2, angle).same_outline(truth, tolerance_px=5)
+    with pytest.raises(RoiError, match=r"an OpenCV RotatedRect is \(\(cx, cy\), \(w, h\), angle\); got"):
+        ellipse_from_opencv((1, 2, 3))
+    with pytest.raises(RoiError, match="semi-axes|positive|greater than 0"):
+        ellipse_from_opencv(((10, 10), (0, 5), 0))

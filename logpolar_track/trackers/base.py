@@ -29,7 +29,8 @@ class TrackState:
     Attributes
     ----------
     ellipse : Ellipse
-        Current outline in pixels; its ``angle_deg`` is the initial angle plus ``rotation_deg``.
+        Current outline in pixels; its ``angle_deg`` is the initial angle plus ``rotation_deg``, not wrapped (the
+        CSV's ``angle_deg`` is, into (-180, 180]).
     scale : float
         Size relative to the initial ROI (1.0 at init).
     rotation_deg : float or None
@@ -62,6 +63,9 @@ class Tracker(ABC):
     @abstractmethod
     def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
         """Start tracking the object inside ``roi`` on ``frame``; returns the initial state (score 1).
+
+        ``frame`` is an image as OpenCV reads it: ``(H, W, 3)`` BGR (or BGRA, or grey), uint8, or float32 from 0 to
+        255 (see :func:`check_frame`); every later frame must be laid out alike.
 
         ``roi`` is an :class:`~logpolar_track.geometry.Ellipse`, or a ``--roi`` string or its 3 or 5 numbers
         (:func:`~logpolar_track.geometry.as_ellipse`): pixels, degrees counter-clockwise on screen."""
@@ -195,8 +199,13 @@ def check_frame(frame: np.ndarray, size: tuple[int, int] | None = None,
         raise UsageError(f"a frame must be an (H, W) grey or (H, W, 3) colour image (or 1 or 4 channels), got "
                          f"shape {frame.shape}")
     if frame.dtype != np.uint8 and frame.dtype != np.float32:
+        if frame.dtype in (np.uint16, np.int32, np.uint32):
+            how = ("cv2.normalize(frame, None, 0, 255, cv2.NORM_MINMAX, cv2.CV_8U), or (frame >> 8).astype(np.uint8) "
+                   "for 16-bit images using their whole range")
+        else:
+            how = "(frame * 255).clip(0, 255).astype(np.uint8) for values 0 to 1"
         raise UsageError(f"a frame must be uint8 (or float32 with values 0 to 255), got {frame.dtype}; convert it "
-                         f"first, e.g. with (frame * 255).clip(0, 255).astype(np.uint8) for values 0 to 1")
+                         f"first, e.g. with {how}")
     if size is not None and (frame.shape[1], frame.shape[0]) != size:
         raise UsageError(f"every frame must have the size of the first ({size[0]}x{size[1]} pixels), got "
                          f"{frame.shape[1]}x{frame.shape[0]}")

@@ -32,7 +32,8 @@ from typing import IO, Callable, Iterable, Mapping, Sequence
 from .errors import LptrackError, RoiError, UsageError
 from .executor import TaskOutcome, run_tasks
 from .geometry import ROI_SYNTAX, Ellipse, parse_roi
-from .pipeline import CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, read_roi_sidecar, read_roi_text, run_video
+from .pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, mirrored_path, read_roi_sidecar,
+                       read_roi_text, run_video)
 from .results import FORMATS, header_line
 from .trackers import tracker_class
 from .video import (CODECS_BY_EXTENSION, announced_frame_count, check_fps, frames_to_track, make_output_folder,
@@ -330,10 +331,13 @@ def _data_suffix(data_format: str) -> str:
     return Path(CSV_OUT_SUFFIX).stem + FORMATS[data_format]  # ".lptrack" + ".csv" / ".jsonl"
 
 
-def _relative_names(videos: list[VideoInput]) -> list[Path]:
+def _relative_names(videos: list[VideoInput], parents: bool = False) -> list[Path]:
     """Each input's path relative to its root folder; loose files relative to their common folder. Where several
     root folders are given, each one's inputs are named under its folder's name (``day1/cam.mp4``,
-    ``day2/cam.mp4`` for ``day1 day2``), as ``cp -r day1 day2 out`` copies them."""
+    ``day2/cam.mp4`` for ``day1 day2``), as ``cp -r day1 day2 out`` copies them. With ``parents``, each input's
+    path as given (:func:`~logpolar_track.pipeline.mirrored_path`), whatever the other inputs."""
+    if parents:
+        return [mirrored_path(v.path) for v in videos]
     loose = [video_key(v.path).parent for v in videos if v.root is None]
     common = Path(os.path.commonpath(loose)) if loose else None
     several = len({v.root for v in videos if v.root is not None}) > 1
@@ -468,7 +472,7 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
                tracker: str = DEFAULT_TRACKER, start_frame: int = 0, max_frames: int | None = None, out_dir=".",
                video: bool = True, stream: bool = False, data_format: str = "csv", overwrite: bool = False,
                skip_existing: bool = False, tracker_params: Mapping[str, Mapping[str, object]] | None = None,
-               fps: float | None = None) -> BatchPlan:
+               fps: float | None = None, parents: bool = False) -> BatchPlan:
     """Give every video its ROI, start frame, tracker and outputs.
 
     Parameters
@@ -493,6 +497,10 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         Outputs go to ``out_dir/<path relative to the input folder>/<stem>.lptrack.{mp4,csv}``; a file name
         shared by two inputs (``a.mp4`` and ``a.avi``) keeps its extension instead: ``a.mp4.lptrack.csv``; with
         several input folders, each is mirrored under its own name (``day1/cam.lptrack.csv``).
+    parents : bool
+        Mirror each input's path as given instead, folders included, whatever the other inputs
+        (``cams/day1/cam.mp4`` -> ``out_dir/cams/day1/cam.lptrack.csv``: :func:`~logpolar_track.pipeline.mirrored_path`,
+        as ``cp --parents``), so that a list of videos split between runs lands as one run would put it.
     video : bool
         Write annotated videos.
     stream : bool
@@ -511,7 +519,7 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
     if not videos:
         videos = [VideoInput(e.video) for e in entries.values()]
     out_dir = Path(out_dir).resolve()
-    relative = _relative_names(videos)
+    relative = _relative_names(videos, parents)
     # What each input's outputs are named after, in its relative folder.
     stems = [rel.with_name(video_stem(item.path)) for item, rel in zip(videos, relative)]
     by_stem: dict[Path, int] = {}

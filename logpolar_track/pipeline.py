@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import codecs
 import math
+import os
 import sys
 import time
 from dataclasses import dataclass
@@ -42,10 +43,24 @@ ProgressLike = Union[bool, Callable[[int, "int | None"], None], None]
 
 def default_outputs(video_path, folder=".") -> tuple[Path, Path]:
     """Default ``(video_out, csv_out)`` for ``video_path``: ``<stem>.lptrack.mp4`` / ``.csv`` in ``folder``
-    (:func:`~logpolar_track.video.video_stem`: ``frame`` for an image sequence ``frame_%04d.png``)."""
+    (:func:`~logpolar_track.video.video_stem`: ``frame`` for an image sequence ``frame_%04d.png``). ``lptrack run
+    --parents`` puts them in ``folder / mirrored_path(video_path).parent``."""
     stem = video_stem(video_path)
     folder = Path(folder)
     return folder / f"{stem}{VIDEO_OUT_SUFFIX}", folder / f"{stem}{CSV_OUT_SUFFIX}"
+
+
+def mirrored_path(path) -> Path:
+    """``path`` as ``cp --parents`` names a copy under a folder, but never a step out of it: as given when it is
+    relative and does not go up (``./cams/day1/cam.mp4`` -> ``cams/day1/cam.mp4``), else its absolute path without
+    the root (``../cams/cam.mp4`` from ``/home/me/work`` -> ``home/me/cams/cam.mp4``). It depends on that path alone,
+    not on the other inputs of a run, so outputs land in the same place however a list of videos is split
+    between runs (``xargs``, ``parallel``)."""
+    path = Path(path)
+    if not path.is_absolute() and ".." not in path.parts:
+        return Path(os.path.normpath(path))
+    absolute = Path(os.path.abspath(path))
+    return absolute.relative_to(absolute.anchor)
 
 
 def roi_sidecar_paths(video_path) -> list[Path]:

@@ -440,6 +440,31 @@ def test_outputs_never_collide(work):
     assert "would overwrite those of 'footage/day1/a.mp4'" in plan.settled["more/footage/day1/a.mp4"].reason
 
 
+def test_parents_names_outputs_alike_however_the_videos_are_split_between_runs(work):
+    """Without --parents a run's layout depends on the other videos given with it: split between runs (``xargs
+    -n 1``) day1's and day2's cam.mp4 both become out/cam.lptrack.csv. With it, each video's own path decides."""
+    shutil.copy(work / "footage/day1/a.mp4", work / "footage/day2/a.mp4")
+    (work / "footage/day2/a.roi").write_text("80,60,20\n")
+    videos = ["footage/day1/a.mp4", "./footage/day2/a.mp4", "footage/day1/b.mp4"]
+    expected = ["footage/day1/a.lptrack.csv", "footage/day1/b.lptrack.csv", "footage/day2/a.lptrack.csv"]
+    for out, groups in ("one", [videos]), ("pairs", [videos[:2], videos[2:]]), ("each", [[v] for v in videos]):
+        for group in groups:
+            result = invoke(*group, "--no-video", "--frames", "3", "--out-dir", out, "--parents", "-q")
+            assert result.exit_code == 0, result.output
+        assert files_under(work / out) == expected, out
+    # Next to the videos without --out-dir; from the filesystem's root for paths going up or absolute.
+    assert invoke("footage/day2/a.mp4", "--no-video", "--frames", "3", "--parents", "-q").exit_code == 0
+    assert (work / "footage/day2/a.lptrack.csv").is_file()
+    from logpolar_track.pipeline import mirrored_path
+
+    assert mirrored_path("../x/clip.mp4") == Path(os.path.abspath("../x/clip.mp4")).relative_to("/")
+    assert mirrored_path(work / "footage/day1/a.mp4") == (work / "footage/day1/a.mp4").relative_to("/")
+    plan = plan_batch(find_videos([str(work / "footage/day1/a.mp4"), "footage/day1/b.mp4"]), out_dir="out",
+                      parents=True)
+    assert [j.csv_out.relative_to(work / "out") for j in plan.jobs] == [
+        (work / "footage/day1/a.lptrack.csv").relative_to("/"), Path("footage/day1/b.lptrack.csv")]
+
+
 @pytest.mark.parametrize("args, fragment", [
     (("footage/day1", "--out", "x.mp4"), "--out names one video's output"),
     (("footage/day1", "--csv", "all.csv"), "--csv names one video's output in this process; with a folder give"),

@@ -20,8 +20,8 @@ from ..batch import (VIDEO_EXTENSIONS, BatchProgress, BatchSummary, find_videos,
                      read_roi_file, run_batch)
 from ..errors import OutputError, UsageError
 from ..executor import default_jobs
-from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, default_outputs, roi_sidecar_paths,
-                        run_video)
+from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, default_outputs, mirrored_path,
+                        roi_sidecar_paths, run_video)
 from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..trackers.base import did_you_mean
@@ -104,8 +104,9 @@ Many videos (several VIDEOs, folders searched recursively, '-' = paths on
 stdin, or --roi-file alone):
   ROI per video: its --roi-file line (video,roi[,start_frame][,tracker]),
   else --roi, else its .roi sidecar; a video with none fails alone.
-  Outputs mirror the inputs under --out-dir (default: the current folder),
-  or --csv - streams every video's rows with a leading 'video' column.
+  Outputs mirror the inputs under --out-dir (default: the current folder;
+  --parents: each input's path as given, for lists split by xargs), or
+  --csv - streams every video's rows with a leading 'video' column.
   Videos run in --jobs processes or on a Dask cluster (--scheduler); one bad
   video never stops the others. Exit 0 all ok, 1 any failed, 2 bad
   arguments, 130 interrupted (only complete outputs are left).
@@ -153,6 +154,10 @@ Examples:
 @click.option("--out-dir", type=click.Path(path_type=Path), metavar="DIR",
               help="Folder for the outputs lptrack names (created if needed), mirroring the inputs' folders; "
                    "--out and --csv paths are used as given. Default: the current folder.")
+@click.option("--parents", is_flag=True,
+              help="Name outputs after each input's path as given, folders included, as cp --parents: "
+                   "cams/day1/cam.mp4 -> DIR/cams/day1/cam.lptrack.csv, whatever else is in the run (for lists "
+                   "split by xargs or parallel). Absolute paths and paths going up (..) are mirrored from the root.")
 @click.option("--format", "data_format", type=click.Choice(tuple(FORMATS)), default=None,
               help="Per-frame data as CSV or JSON lines. Default: from the --csv file's extension (.jsonl: JSON "
                    "lines), else CSV.")
@@ -169,8 +174,9 @@ Examples:
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary on stderr (failures still).")
 def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tracker: str,
         params: tuple[str, ...], start_frame: int, max_frames: int | None, fps: float | None,
-        video_out: Path | None, csv_out: str | None, out_dir: Path | None, data_format: str, no_video: bool,
-        overwrite: bool, skip_existing: bool, jobs: int | None, scheduler: str | None, quiet: bool) -> None:
+        video_out: Path | None, csv_out: str | None, out_dir: Path | None, parents: bool, data_format: str,
+        no_video: bool, overwrite: bool, skip_existing: bool, jobs: int | None, scheduler: str | None,
+        quiet: bool) -> None:
     """Track the object inside a circle or ellipse through VIDEO (or many).
 
     VIDEO is a video file, or an image sequence named as FFmpeg takes it
@@ -212,8 +218,9 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
         tuning = parse_param_options(params, [tracker])[tracker]
         _check_out_dir(out_dir, video_out=video_out, csv_out=csv_out, no_video=no_video, quiet=quiet)
         _run_one(Path(videos[0]), roi, tracker=tracker, tuning=tuning, start_frame=start_frame, max_frames=max_frames,
-                 fps=fps, video_out=video_out, csv_out=csv_out, out_dir=out_dir, data_format=data_format,
-                 no_video=no_video, overwrite=overwrite, skip_existing=skip_existing, quiet=quiet)
+                 fps=fps, video_out=video_out, csv_out=csv_out, out_dir=out_dir, parents=parents,
+                 data_format=data_format, no_video=no_video, overwrite=overwrite, skip_existing=skip_existing,
+                 quiet=quiet)
         return
     # Inputs first: a malformed ROI file is the error to see, not what the outputs would have been.
     entries = read_roi_file(roi_file) if roi_file is not None else []
@@ -262,7 +269,7 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
         raise UsageError(f"no videos found in {', '.join('stdin' if v == '-' else repr(v) for v in videos)}{why}")
     plan = plan_batch(inputs, roi=roi, roi_entries=entries, tracker=tracker, start_frame=start_frame,
                       max_frames=max_frames, fps=fps, out_dir=out_dir or ".", video=not no_video, stream=stream,
-                      data_format=data_format, overwrite=overwrite, skip_existing=skip_existing)
+                      data_format=data_format, overwrite=overwrite, skip_existing=skip_existing, parents=parents)
     if params:
         # Checked against the trackers of the videos that will run, so that a parameter none of them takes is
         # an error, not silently unused.
@@ -313,9 +320,11 @@ def _reader_left(stream) -> bool:
 
 
 def _run_one(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, max_frames: int | None,
-             fps: float | None, video_out: Path | None, csv_out: str | None, out_dir: Path | None, data_format: str,
-             no_video: bool, overwrite: bool, skip_existing: bool, quiet: bool) -> None:
+             fps: float | None, video_out: Path | None, csv_out: str | None, out_dir: Path | None, parents: bool,
+             data_format: str, no_video: bool, overwrite: bool, skip_existing: bool, quiet: bool) -> None:
     """One video in this process, errors raised as they are (exit 1 or 2)."""
+    if parents:
+        out_dir = Path(out_dir or ".") / mirrored_path(video).parent
     created = make_output_folder(out_dir) if out_dir is not None else []
     try:
         _run_one_into(video, roi, tracker=tracker, tuning=tuning, start_frame=start_frame, max_frames=max_frames,

@@ -37,7 +37,7 @@ from .pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, mirror
 from .results import FORMATS, header_line
 from .trackers import tracker_class
 from .video import (CODECS_BY_EXTENSION, announced_frame_count, check_fps, frames_to_track, make_output_folder,
-                    remove_empty_folders, temporary_path, video_stem)
+                    is_image_sequence, remove_empty_folders, temporary_path, video_stem)
 
 #: File extensions searched for in input folders (case-insensitive).
 VIDEO_EXTENSIONS: tuple[str, ...] = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".ts",
@@ -152,6 +152,25 @@ def is_video_name(path: Path) -> bool:
     the way (temporary outputs are hidden), not one of lptrack's own annotated videos."""
     return (path.suffix.lower() in VIDEO_EXTENSIONS and not any(part.startswith(".") for part in path.parts)
             and not path.stem.endswith(OUTPUT_STEM_SUFFIX))
+
+
+def mirrored_output_base(video) -> Path:
+    """What ``--parents`` names ``video``'s outputs after, suffixes to come: its path as given
+    (:func:`~logpolar_track.pipeline.mirrored_path`) with its stem for a name, or its whole file name where another
+    video in its folder has that stem (``a.mp4`` beside ``a.avi``: ``a.mp4.lptrack.csv``). The folder decides, not
+    the other videos of the run, so that runs given the two apart name them as one run does."""
+    video = Path(video)
+    mirrored = mirrored_path(video)
+    stem = video_stem(video)
+    if not is_image_sequence(video):
+        try:
+            twin = any(entry.name != video.name and Path(entry.name).stem == stem and is_video_name(Path(entry.name))
+                       for entry in os.scandir(video.parent))
+        except OSError:
+            twin = False
+        if twin:
+            return mirrored
+    return mirrored.with_name(stem)
 
 
 def video_key(path) -> Path:
@@ -331,13 +350,10 @@ def _data_suffix(data_format: str) -> str:
     return Path(CSV_OUT_SUFFIX).stem + FORMATS[data_format]  # ".lptrack" + ".csv" / ".jsonl"
 
 
-def _relative_names(videos: list[VideoInput], parents: bool = False) -> list[Path]:
+def _relative_names(videos: list[VideoInput]) -> list[Path]:
     """Each input's path relative to its root folder; loose files relative to their common folder. Where several
     root folders are given, each one's inputs are named under its folder's name (``day1/cam.mp4``,
-    ``day2/cam.mp4`` for ``day1 day2``), as ``cp -r day1 day2 out`` copies them. With ``parents``, each input's
-    path as given (:func:`~logpolar_track.pipeline.mirrored_path`), whatever the other inputs."""
-    if parents:
-        return [mirrored_path(v.path) for v in videos]
+    ``day2/cam.mp4`` for ``day1 day2``), as ``cp -r day1 day2 out`` copies them."""
     loose = [video_key(v.path).parent for v in videos if v.root is None]
     common = Path(os.path.commonpath(loose)) if loose else None
     several = len({v.root for v in videos if v.root is not None}) > 1
@@ -499,8 +515,8 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         several input folders, each is mirrored under its own name (``day1/cam.lptrack.csv``).
     parents : bool
         Mirror each input's path as given instead, folders included, whatever the other inputs
-        (``cams/day1/cam.mp4`` -> ``out_dir/cams/day1/cam.lptrack.csv``: :func:`~logpolar_track.pipeline.mirrored_path`,
-        as ``cp --parents``), so that a list of videos split between runs lands as one run would put it.
+        (``cams/day1/cam.mp4`` -> ``out_dir/cams/day1/cam.lptrack.csv``, as ``cp --parents``:
+        :func:`mirrored_output_base`), so that a list of videos split between runs lands as one run would put it.
     video : bool
         Write annotated videos.
     stream : bool
@@ -519,7 +535,7 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
     if not videos:
         videos = [VideoInput(e.video) for e in entries.values()]
     out_dir = Path(out_dir).resolve()
-    relative = _relative_names(videos, parents)
+    relative = _relative_names(videos)
     # What each input's outputs are named after, in its relative folder.
     stems = [rel.with_name(video_stem(item.path)) for item, rel in zip(videos, relative)]
     by_stem: dict[Path, int] = {}
@@ -531,7 +547,7 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         label = str(item.path)
         order.append(label)
         # Two inputs sharing a stem in one folder keep their extension in the output names.
-        base = stem if by_stem[stem] == 1 else rel
+        base = mirrored_output_base(item.path) if parents else stem if by_stem[stem] == 1 else rel
         folder = out_dir / base.parent
         video_out = folder / f"{base.name}{VIDEO_OUT_SUFFIX}" if video else None
         csv_out = None if stream else folder / f"{base.name}{_data_suffix(data_format)}"

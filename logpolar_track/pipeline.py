@@ -41,24 +41,25 @@ RoiLike = Union[Ellipse, str, Sequence[float], None]
 ProgressLike = Union[bool, Callable[[int, "int | None"], None], None]
 
 
-def default_outputs(video_path, folder=".") -> tuple[Path, Path]:
+def default_outputs(video_path, folder=".", name: str | None = None) -> tuple[Path, Path]:
     """Default ``(video_out, csv_out)`` for ``video_path``: ``<stem>.lptrack.mp4`` / ``.csv`` in ``folder``
-    (:func:`~logpolar_track.video.video_stem`: ``frame`` for an image sequence ``frame_%04d.png``). ``lptrack run
-    --parents`` puts them in ``folder / mirrored_path(video_path).parent``."""
-    stem = video_stem(video_path)
+    (:func:`~logpolar_track.video.video_stem`: ``frame`` for an image sequence ``frame_%04d.png``), or named after
+    ``name`` instead of the stem."""
+    stem = video_stem(video_path) if name is None else name
     folder = Path(folder)
     return folder / f"{stem}{VIDEO_OUT_SUFFIX}", folder / f"{stem}{CSV_OUT_SUFFIX}"
 
 
 def mirrored_path(path) -> Path:
     """``path`` as ``cp --parents`` names a copy under a folder, but never a step out of it: as given when it is
-    relative and does not go up (``./cams/day1/cam.mp4`` -> ``cams/day1/cam.mp4``), else its absolute path without
-    the root (``../cams/cam.mp4`` from ``/home/me/work`` -> ``home/me/cams/cam.mp4``). It depends on that path alone,
+    relative and, once ``.`` and ``..`` are taken out of it, does not go up (``./cams/day1/cam.mp4`` and
+    ``cams/x/../day1/cam.mp4`` -> ``cams/day1/cam.mp4``), else its absolute path without the root (``../cams/cam.mp4``
+    from ``/home/me/work`` -> ``home/me/cams/cam.mp4``). It depends on that path alone,
     not on the other inputs of a run, so outputs land in the same place however a list of videos is split
     between runs (``xargs``, ``parallel``)."""
-    path = Path(path)
-    if not path.is_absolute() and ".." not in path.parts:
-        return Path(os.path.normpath(path))
+    path = Path(os.path.normpath(path))  # lexically, as cp does: 'cams/../b/c.mp4' is 'b/c.mp4'
+    if not path.is_absolute() and path.parts[:1] != ("..",):
+        return path
     absolute = Path(os.path.abspath(path))
     return absolute.relative_to(absolute.anchor)
 

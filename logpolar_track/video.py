@@ -75,7 +75,8 @@ def _frame_number_text(field: re.Match, number: int) -> str:
     (``%04d`` and ``%4d``: ``0007``; ``%d``: ``7``). C's printf, and so OpenCV's reader, pads ``%4d`` with spaces,
     which no numbered image file has."""
     width = field.group(0)[1:-1]
-    return f"{number:0{int(width)}d}" if width else str(number)
+    # No file name holds more than 255 characters: a wider field (a typo) is read as that wide, not built.
+    return f"{number:0{min(int(width), 255)}d}" if width else str(number)
 
 
 def is_image_sequence(path) -> bool:

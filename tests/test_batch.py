@@ -458,11 +458,26 @@ def test_parents_names_outputs_alike_however_the_videos_are_split_between_runs(w
     from logpolar_track.pipeline import mirrored_path
 
     assert mirrored_path("../x/clip.mp4") == Path(os.path.abspath("../x/clip.mp4")).relative_to("/")
+    assert mirrored_path("./footage/day1/../day2/a.mp4") == Path("footage/day2/a.mp4")  # lexically, as cp
     assert mirrored_path(work / "footage/day1/a.mp4") == (work / "footage/day1/a.mp4").relative_to("/")
     plan = plan_batch(find_videos([str(work / "footage/day1/a.mp4"), "footage/day1/b.mp4"]), out_dir="out",
                       parents=True)
     assert [j.csv_out.relative_to(work / "out") for j in plan.jobs] == [
         (work / "footage/day1/a.lptrack.csv").relative_to("/"), Path("footage/day1/b.lptrack.csv")]
+    # Two videos of one stem side by side keep their extensions, given together or apart: the folder decides.
+    shutil.copy(work / "footage/day2/c.avi", work / "footage/day2/a.avi")
+    for out, groups in ("twins", [["footage/day2/a.mp4", "footage/day2/a.avi"]]), \
+                       ("twins apart", [["footage/day2/a.mp4"], ["footage/day2/a.avi"]]):
+        for group in groups:
+            result = invoke(*group, "--no-video", "--frames", "3", "--out-dir", out, "--parents", "-q")
+            assert result.exit_code == 0, result.output
+        assert files_under(work / out) == ["footage/day2/a.avi.lptrack.csv", "footage/day2/a.mp4.lptrack.csv"]
+    # Where lptrack names no output, --parents has nothing to do: said, as for --out-dir.
+    for args in (("footage/day2/c.avi", "--csv", "-", "--no-video"), ("footage/day1", "--csv", "-", "--no-video")):
+        result = CliRunner().invoke(main, ["run", *args, "--parents"])
+        assert result.exit_code == 2
+        assert "--parents would name nothing: it names the outputs lptrack names, and --csv - and --no-video leave " \
+               "it none; drop --parents" in result.output
 
 
 @pytest.mark.parametrize("args, fragment", [

@@ -223,9 +223,11 @@ def test_update_before_init_raises():
     (np.zeros((120, 160, 3)), Ellipse(80, 60, 20, 20, 0), UsageError, "uint8 (or float32 with values 0 to 255), "
                                                                       "got float64"),
     (np.zeros((120, 160), np.uint16), Ellipse(80, 60, 20, 20, 0), UsageError, "got uint16; convert it first, e.g. "
-                                                                                 "with cv2.normalize(frame, None, 0, "
-                                                                                 "255, cv2.NORM_MINMAX, cv2.CV_8U)"),
-    (np.zeros((120, 160, 3)), Ellipse(80, 60, 20, 20, 0), UsageError, "e.g. with (frame * 255).clip(0, 255)"),
+                                                                                 "(frame >> 8).astype(np.uint8)"),
+    (np.zeros((120, 160, 3)), Ellipse(80, 60, 20, 20, 0), UsageError, "e.g. frame.astype(np.float32) for values 0 "
+                                                                      "to 255, (frame * 255).clip(0, 255)"),
+    (np.zeros((120, 160), np.int16), Ellipse(80, 60, 20, 20, 0), UsageError, "got int16; convert it first, e.g. one "
+                                                                                "scale for the whole video"),
 ])
 def test_init_refuses_what_it_cannot_track(name, frame, roi, error, fragment):
     """Called from Python, a tracker says what is wrong with its start (as ``lptrack run`` does), instead of

@@ -560,6 +560,9 @@ def test_a_width_without_a_zero_pads_with_zeros_as_in_ffmpeg(tmp_path):
     with pytest.raises(VideoError, match=r"no images match '.*f_%3d.png': %3d stands for the frame number, "
                                          r"e.g. '.*shots/f_001.png'"):
         VideoReader(pattern.with_name("f_%3d.png"))
+    for typo in ("f_%99999999999999999999d.png", "f_%999999999d.png"):  # a ValueError; a 1 GB string
+        with pytest.raises(VideoError, match=r"no images match"):
+            VideoReader(pattern.with_name(typo))
 
 
 def test_grey_and_16_bit_images_are_read_as_8_bit_bgr(tmp_path):

@@ -16,12 +16,12 @@ from pathlib import Path
 
 import click
 
-from ..batch import (VIDEO_EXTENSIONS, BatchProgress, BatchSummary, find_videos, outputs_complete, plan_batch,
-                     read_roi_file, run_batch)
+from ..batch import (VIDEO_EXTENSIONS, BatchProgress, BatchSummary, find_videos, mirrored_output_base,
+                     outputs_complete, plan_batch, read_roi_file, run_batch)
 from ..errors import OutputError, UsageError
 from ..executor import default_jobs
-from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, default_outputs, mirrored_path,
-                        roi_sidecar_paths, run_video)
+from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, default_outputs, roi_sidecar_paths,
+                        run_video)
 from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..trackers.base import did_you_mean
@@ -216,7 +216,8 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
               and scheduler is None)
     if single:
         tuning = parse_param_options(params, [tracker])[tracker]
-        _check_out_dir(out_dir, video_out=video_out, csv_out=csv_out, no_video=no_video, quiet=quiet)
+        _check_out_dir(out_dir, video_out=video_out, csv_out=csv_out, no_video=no_video, quiet=quiet,
+                       parents=parents)
         _run_one(Path(videos[0]), roi, tracker=tracker, tuning=tuning, start_frame=start_frame, max_frames=max_frames,
                  fps=fps, video_out=video_out, csv_out=csv_out, out_dir=out_dir, parents=parents,
                  data_format=data_format, no_video=no_video, overwrite=overwrite, skip_existing=skip_existing,
@@ -239,7 +240,7 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     if csv_out not in (None, "-"):
         raise UsageError(f"--csv names one video's output in this process; {many} give --out-dir DIR, "
                          f"or --csv - for one stream with a 'video' column")
-    _check_out_dir(out_dir, video_out=None, csv_out=csv_out, no_video=no_video, quiet=quiet)
+    _check_out_dir(out_dir, video_out=None, csv_out=csv_out, no_video=no_video, quiet=quiet, parents=parents)
     stream = csv_out == "-"
     if stream and sys.stdout is None:
         raise OutputError("cannot write the rows to stdout: it is closed")
@@ -288,17 +289,22 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
 
 
 def _check_out_dir(out_dir: Path | None, *, video_out: Path | None, csv_out: str | None, no_video: bool,
-                   quiet: bool) -> None:
-    """``--out-dir`` holds the outputs lptrack names; outputs named on the command line go where named (as in
-    FFmpeg). Never silently: an --out-dir left nothing is an error, one left some outputs is noted."""
-    if out_dir is None:
+                   quiet: bool, parents: bool = False) -> None:
+    """``--out-dir`` holds the outputs lptrack names, and ``--parents`` names them; outputs named on the command
+    line go where named (as in FFmpeg). Never silently: an --out-dir or --parents left nothing is an error, an
+    --out-dir left some outputs is noted."""
+    if out_dir is None and not parents:
         return
     video_named = "--no-video" if no_video else (f"--out {video_out}" if video_out is not None else None)
     csv_named = None if csv_out is None else f"--csv {csv_out}"
     if video_named and csv_named:
-        raise UsageError(f"--out-dir would hold nothing: it is the folder for the outputs lptrack names, and "
-                         f"{csv_named} and {video_named} leave it none; drop --out-dir, or put the folder in "
-                         f"the names")
+        what, how = ("--out-dir would hold", "it is the folder for") if out_dir is not None else (
+            "--parents would name", "it names")
+        option = "--out-dir" if out_dir is not None else "--parents"
+        raise UsageError(f"{what} nothing: {how} the outputs lptrack names, and {csv_named} and {video_named} "
+                         f"leave it none; drop {option}" + (", or put the folder in the names" if out_dir else ""))
+    if out_dir is None:
+        return
     named = [str(p) for p in (video_out, csv_out) if p is not None and str(p) != "-"]
     if named and not quiet:
         click.echo(f"lptrack: note: --out-dir holds the outputs lptrack names; '{named[0]}' is written where "
@@ -323,21 +329,25 @@ def _run_one(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, 
              fps: float | None, video_out: Path | None, csv_out: str | None, out_dir: Path | None, parents: bool,
              data_format: str, no_video: bool, overwrite: bool, skip_existing: bool, quiet: bool) -> None:
     """One video in this process, errors raised as they are (exit 1 or 2)."""
-    if parents:
-        out_dir = Path(out_dir or ".") / mirrored_path(video).parent
+    name = None
+    if parents:  # _check_parents: some output is named by lptrack
+        base = Path(out_dir or ".") / mirrored_output_base(video)
+        out_dir, name = base.parent, base.name
     created = make_output_folder(out_dir) if out_dir is not None else []
     try:
         _run_one_into(video, roi, tracker=tracker, tuning=tuning, start_frame=start_frame, max_frames=max_frames,
-                      fps=fps, video_out=video_out, csv_out=csv_out, out_dir=out_dir, data_format=data_format,
-                      no_video=no_video, overwrite=overwrite, skip_existing=skip_existing, quiet=quiet)
+                      fps=fps, video_out=video_out, csv_out=csv_out, out_dir=out_dir, name=name,
+                      data_format=data_format, no_video=no_video, overwrite=overwrite, skip_existing=skip_existing,
+                      quiet=quiet)
     finally:
         remove_empty_folders(created)  # a run that failed or was stopped leaves no folder made for it
 
 
 def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, max_frames: int | None,
                   fps: float | None, video_out: Path | None, csv_out: str | None, out_dir: Path | None,
-                  data_format: str, no_video: bool, overwrite: bool, skip_existing: bool, quiet: bool) -> None:
-    default_video, default_csv = default_outputs(video, out_dir or ".")
+                  name: str | None, data_format: str, no_video: bool, overwrite: bool, skip_existing: bool,
+                  quiet: bool) -> None:
+    default_video, default_csv = default_outputs(video, out_dir or ".", name)
     if not no_video and video_out is None:
         video_out = default_video
     if csv_out is None:

@@ -199,13 +199,15 @@ def check_frame(frame: np.ndarray, size: tuple[int, int] | None = None,
         raise UsageError(f"a frame must be an (H, W) grey or (H, W, 3) colour image (or 1 or 4 channels), got "
                          f"shape {frame.shape}")
     if frame.dtype != np.uint8 and frame.dtype != np.float32:
-        if frame.dtype in (np.uint16, np.int32, np.uint32):
-            how = ("cv2.normalize(frame, None, 0, 255, cv2.NORM_MINMAX, cv2.CV_8U), or (frame >> 8).astype(np.uint8) "
-                   "for 16-bit images using their whole range")
+        if np.issubdtype(frame.dtype, np.floating):
+            how = "frame.astype(np.float32) for values 0 to 255, (frame * 255).clip(0, 255).astype(np.uint8) for 0 to 1"
+        elif frame.dtype == np.uint16:
+            how = ("(frame >> 8).astype(np.uint8) (one scale for every frame of a video: cv2.normalize's NORM_MINMAX "
+                   "would rescale each frame on its own)")
         else:
-            how = "(frame * 255).clip(0, 255).astype(np.uint8) for values 0 to 1"
+            how = "one scale for the whole video into 0 to 255, then .astype(np.uint8)"
         raise UsageError(f"a frame must be uint8 (or float32 with values 0 to 255), got {frame.dtype}; convert it "
-                         f"first, e.g. with {how}")
+                         f"first, e.g. {how}")
     if size is not None and (frame.shape[1], frame.shape[0]) != size:
         raise UsageError(f"every frame must have the size of the first ({size[0]}x{size[1]} pixels), got "
                          f"{frame.shape[1]}x{frame.shape[0]}")

@@ -708,7 +708,7 @@ def test_a_search_in_parts_covers_each_pose_part_by_part_in_turn(monkeypatch):
     order = [(0.0, 1.0)] * lpcf._SEARCH_AS_LEFT + list(lpcf._SEARCH_POSES) * 9
     assert [pose for pose, _, _ in sweeps] == order[:len(sweeps)]
     assert len(sweeps) > lpcf._SEARCH_AS_LEFT + len(lpcf._SEARCH_POSES)  # a whole cycle of the poses
-    assert sweeps[0][1] >= 2 and len({parts for _, parts, _ in sweeps}) >= 3  # 2 parts upright, 4 turned, ...
+    assert sweeps[0][1] >= 2 and len({parts for _, parts, _ in sweeps}) >= 2  # 2 parts upright, 4 turned
 
 
 @pytest.mark.parametrize("seed", [0, 2])
@@ -1189,13 +1189,15 @@ def _is_fast_dft_size(n: int) -> bool:
 def test_patch_sides_are_fast_dft_sizes_near_the_padded_extent(b):
     """Both patch sides are even products of 2, 3 and 5 (OpenCV's DFT took 2-3 times as long on 38 or 58
     samples as on 40 or 60), and the nearest such size to the padded object's extent: between consecutive such
-    sizes up to 80 the gap is at most 8, so at most 4 samples off."""
+    sizes up to 80 the gap is at most 8, so at most 4 samples off. The margin is the same on every side, padding
+    times the mean radius sqrt(a b), except for an ellipse thinner than 1 to 4 (b 8 and 11), whose margin is
+    padding times each semi-axis."""
     frame = random_texture(240, 320, np.random.default_rng(0))
     roi = Ellipse(160.0, 120.0, 60.0, float(b), 0.0)
     tracker = create_tracker("lpcf")
     tracker.init(frame, roi)
-    half_w, half_h = tracker._patch_ellipse(roi).half_extents()
-    wanted = (2 * half_w * (1 + tracker.padding) / tracker.step, 2 * half_h * (1 + tracker.padding) / tracker.step)
+    margins = (60.0, float(b)) if b < 15 else (math.sqrt(60.0 * b),) * 2
+    wanted = [(2 * half + 2 * tracker.padding * margin) / tracker.step for half, margin in zip((60.0, b), margins)]
     for side, extent in zip(tracker.size, wanted):
         assert side % 2 == 0 and _is_fast_dft_size(side), (side, extent)
         assert abs(side - extent) <= 4, (side, extent)

@@ -111,8 +111,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
     ----------
     padding : float
         The search patch's margin around the object's box, on every side, as a multiple of the object's mean
-        radius (the geometric mean of its semi-axes): 1.0 doubles a circle's box. A thin ellipse's margin is
-        ``padding`` times each half side instead (see ``_SAME_MARGIN``).
+        radius (the geometric mean of its semi-axes): 1.0 doubles a circle's box. A thin ellipse's (minor semi-axis
+        under a quarter of the major) is ``padding`` times each semi-axis instead, so the patch of an ROI on either
+        side of that ratio differs (60 x 16 px: 64 x 32 samples; 60 x 14.9: 64 x 16; see ``_SAME_MARGIN``).
     patch_samples : int
         Samples along the patch's longer side (the patch is resampled to this resolution).
     learning_rate : float
@@ -759,6 +760,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             refined.rotation_deg - last.rotation_deg, math.log(refined.scale / last.scale), lp_height, found_elsewhere)
         self.misses = 0
         self._last_good = refined
+        # The longer half side of the patch over (1 + padding): the object's longer semi-axis for a circle or a thin
+        # ellipse; with the same margin on every side (_SAME_MARGIN) 0.8-0.9 of it on the real sequences' ellipses,
+        # as measured (the accuracy figures of _SAME_MARGIN are with this bound).
         reach = 0.5 * max(self.size) * self.step * refined.scale / (1 + self.padding)
         speed = float(np.hypot(*self.velocity))
         if speed > reach:
@@ -1638,7 +1642,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
     def _object_and_surround(self, roi: Ellipse) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Over the feature patch's samples ``(ny, nx)`` at scale 1: the radius of the ROI's ellipse through each (1
         on its outline), and masks of the samples on the object (inside the ellipse) and around it (1.2 to 2 times
-        it)."""
+        it, within the patch: along an elongated object the patch ends before 2 times it)."""
         radius = np.sqrt(self._ellipse_radius_squared(roi, self.size))
         return radius, radius < 1.0, (radius > 1.2) & (radius < 2.0)
 
@@ -1690,15 +1694,19 @@ class LogPolarCorrelationTracker(SimilarityTracker):
 
 
 #: The search patch's margin (see ``padding``) is the same on every side, ``padding`` times the object's mean
-#: radius, as CSRT's and KCF's search areas are; until 2026-12-06 it was ``padding`` times each half side. In
-#: proportion to each side, a walker's patch held little of the street on either side of him and much above and
-#: below. With the same margin, over 33 starts of the seven real sequences, start by start: played backwards, the
-#: direction nothing was tuned on, mean IoU AUC 0.433 -> 0.449 (+0.017 +- 0.006; crossing +0.064 +- 0.015, human3
-#: +0.017 +- 0.012); forwards 0.518 -> 0.513 (-0.006 +- 0.006), all of it on the 13 starts the constants were
-#: chosen on (-0.015; the 20 others +0.000). Ellipses thinner than ``_ROUND_GRID_ASPECT`` (none of the real
-#: sequences) keep the margin in proportion: along a sliver of semi-axes 100 and 15 px the same margin is two fifths
-#: of that, and its reported size drifted over a zoom (median 3.7 % off, against 1.8 %; half the margin along it
-#: was not enough either).
+#: radius, as CSRT adds ``padding`` times the square root of the box's area to each side; until 2026-12-06 it was
+#: ``padding`` times each half side. In proportion to each side, a walker's patch held little of the street on
+#: either side of him and much above and below. With the same margin, over 33 starts of the seven real sequences,
+#: paired start by start: played backwards, the direction nothing was tuned on, mean IoU AUC 0.433 -> 0.449 (+0.017
+#: +- 0.006; crossing +0.064 +- 0.015, human3 +0.017 +- 0.012); forwards 0.518 -> 0.513 (-0.006 +- 0.006; human3
+#: -0.039 +- 0.028), -0.015 +- 0.009 on the 13 starts the constants were chosen on and +0.000 +- 0.007 on the 20
+#: others. Ellipses thinner than ``_ROUND_GRID_ASPECT`` (minor semi-axis under a quarter of the major; none of the
+#: real sequences) keep the margin in proportion: along a sliver of semi-axes 100 and 15 px the same margin is two
+#: fifths of that, and its reported size drifted over a zoom (median 3.2 % off, against 1.8 %; 3.7 % with half the
+#: proportional margin as a floor). An elongated object's patch now spans less along it, so its samples are closer
+#: (up to a fifth on the real sequences) and the constants counted in samples (``_REFINE_MAX_SAMPLES``,
+#: ``_UNPREDICTED_SAMPLES``, the search map's spacing) cover fewer pixels; its patch has more samples across, which
+#: costs time (the 60 x 40 px ellipse of the speed benchmark 64 x 40 -> 64 x 54 samples, 1.1-1.2 -> 1.27 ms).
 _SAME_MARGIN = True
 
 #: Gradient refinement (see ``_refine``): the appearance patch covers the ROI's ellipse enlarged this much, and

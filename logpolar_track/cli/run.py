@@ -330,7 +330,7 @@ def _run_one(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, 
              data_format: str, no_video: bool, overwrite: bool, skip_existing: bool, quiet: bool) -> None:
     """One video in this process, errors raised as they are (exit 1 or 2)."""
     name = None
-    if parents:  # _check_parents: some output is named by lptrack
+    if parents:  # _check_out_dir made sure lptrack names at least one of the outputs
         base = Path(out_dir or ".") / mirrored_output_base(video)
         out_dir, name = base.parent, base.name
     created = make_output_folder(out_dir) if out_dir is not None else []

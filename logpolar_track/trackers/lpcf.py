@@ -113,7 +113,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         The search patch's margin around the object's box, on every side, as a multiple of the object's mean
         radius (the geometric mean of its semi-axes): 1.0 doubles a circle's box. A thin ellipse's (minor semi-axis
         under a quarter of the major) is ``padding`` times each semi-axis instead, so the patch of an ROI on either
-        side of that ratio differs (60 x 16 px: 64 x 32 samples; 60 x 14.9: 64 x 16; see ``_SAME_MARGIN``).
+        side of that ratio differs (semi-axes 60 and 16 px: 64 x 32 samples; 60 and 14.9: 64 x 16; see
+        ``_SAME_MARGIN``).
     patch_samples : int
         Samples along the patch's longer side (the patch is resampled to this resolution).
     learning_rate : float
@@ -1693,18 +1694,18 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         return grey
 
 
-#: The search patch's margin (see ``padding``) is the same on every side, ``padding`` times the object's mean
-#: radius, as CSRT adds ``padding`` times the square root of the box's area to each side; until 2026-12-06 it was
-#: ``padding`` times each half side. In proportion to each side, a walker's patch held little of the street on
-#: either side of him and much above and below. With the same margin, over 33 starts of the seven real sequences,
-#: paired start by start: played backwards, the direction nothing was tuned on, mean IoU AUC 0.433 -> 0.449 (+0.017
-#: +- 0.006; crossing +0.064 +- 0.015, human3 +0.017 +- 0.012); forwards 0.518 -> 0.513 (-0.006 +- 0.006; human3
-#: -0.039 +- 0.028), -0.015 +- 0.009 on the 13 starts the constants were chosen on and +0.000 +- 0.007 on the 20
-#: others. Ellipses thinner than ``_ROUND_GRID_ASPECT`` (minor semi-axis under a quarter of the major; none of the
-#: real sequences) keep the margin in proportion: along a sliver of semi-axes 100 and 15 px the same margin is two
+#: The search patch's margin (see ``padding``) is the same on every side, ``padding`` times the object's mean radius, as
+#: in CSRT's search area (its box grown by one amount, a multiple of the square root of its area, in width and in
+#: height); until 2026-12-06 it was ``padding`` times each half side. In proportion to each side, a walker's patch held
+#: little of the street on either side of him and much above and below. With the same margin, over 33 starts of the
+#: seven real sequences, paired start by start: played backwards, the direction nothing was tuned on, mean IoU AUC 0.433
+#: -> 0.449 (+0.017 +- 0.006; crossing +0.064 +- 0.015, human3 +0.017 +- 0.012); forwards 0.518 -> 0.513 (-0.006 +-
+#: 0.006; human3 -0.039 +- 0.028), -0.015 +- 0.009 on the 13 starts the constants were chosen on and +0.000 +- 0.007 on
+#: the 20 others. Ellipses thinner than ``_ROUND_GRID_ASPECT`` (minor semi-axis under a quarter of the major; none of
+#: the real sequences) keep the margin in proportion: along a sliver of semi-axes 100 and 15 px the same margin is two
 #: fifths of that, and its reported size drifted over a zoom (median 3.2 % off, against 1.8 %; 3.7 % with half the
-#: proportional margin as a floor). An elongated object's patch now spans less along it, so its samples are closer
-#: (up to a fifth on the real sequences) and the constants counted in samples (``_REFINE_MAX_SAMPLES``,
+#: proportional margin as a floor). An elongated object's patch now spans less along it, so its samples are closer (up
+#: to a fifth on the real sequences) and the constants counted in samples (``_REFINE_MAX_SAMPLES``,
 #: ``_UNPREDICTED_SAMPLES``, the search map's spacing) cover fewer pixels; its patch has more samples across, which
 #: costs time (the 60 x 40 px ellipse of the speed benchmark 64 x 40 -> 64 x 54 samples, 1.1-1.2 -> 1.27 ms).
 _SAME_MARGIN = True

@@ -298,11 +298,12 @@ def _check_out_dir(out_dir: Path | None, *, video_out: Path | None, csv_out: str
     video_named = "--no-video" if no_video else (f"--out {video_out}" if video_out is not None else None)
     csv_named = None if csv_out is None else f"--csv {csv_out}"
     if video_named and csv_named:
-        what, how = ("--out-dir would hold", "it is the folder for") if out_dir is not None else (
-            "--parents would name", "it names")
-        option = "--out-dir" if out_dir is not None else "--parents"
-        raise UsageError(f"{what} nothing: {how} the outputs lptrack names, and {csv_named} and {video_named} "
-                         f"leave it none; drop {option}" + (", or put the folder in the names" if out_dir else ""))
+        left_none = f"{csv_named} and {video_named} leave it none"
+        if out_dir is not None:
+            raise UsageError(f"--out-dir would hold nothing: it is the folder for the outputs lptrack names, and "
+                             f"{left_none}; drop --out-dir, or put the folder in the names")
+        raise UsageError(f"--parents would name nothing: it names the outputs lptrack names, and {left_none}; drop "
+                         f"--parents")
     if out_dir is None:
         return
     named = [str(p) for p in (video_out, csv_out) if p is not None and str(p) != "-"]

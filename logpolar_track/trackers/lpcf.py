@@ -394,8 +394,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         # 0.405 -> 0.410).
         self._patch_angle = roi.angle_deg  # degrees, counter-clockwise: the patches' axes at rotation 0
         half_w, half_h = self._patch_ellipse(roi).half_extents()
-        # The same margin on every side (see _SAME_MARGIN), except for thin ellipses.
-        if _SAME_MARGIN and min(half_w, half_h) >= _ROUND_GRID_ASPECT * max(half_w, half_h):
+        # A thin ellipse (see _ROUND_GRID_ASPECT) keeps a margin in proportion to each side and is matched in log-polar
+        # on a round grid (below); the others get the same margin on every side (see _SAME_MARGIN).
+        thin = min(roi.a, roi.b) < _ROUND_GRID_ASPECT * max(roi.a, roi.b)
+        if _SAME_MARGIN and not thin:
             margin_w = margin_h = self.padding * math.sqrt(half_w * half_h)
         else:
             margin_w, margin_h = self.padding * half_w, self.padding * half_h
@@ -419,14 +421,13 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         # not a shift along the angle axis, and the angle ran off: such an ellipse gets the circle of its longer
         # semi-axis, its match weighted to its own outline (see _ROUND_GRID_ASPECT and _ROUND_GRID_SUPPORT).
         grid_a, grid_b = roi.a, roi.b
-        round_grid = min(roi.a, roi.b) < _ROUND_GRID_ASPECT * max(roi.a, roi.b)
-        if round_grid:
+        if thin:
             grid_a = grid_b = max(roi.a, roi.b)
         self.grid = LogPolarGrid(grid_a * self.lp_extent, grid_b * self.lp_extent, n_rho=self.n_rho,
                                  n_theta=self.n_theta, inner_px=2.0)
         self._lp_reach = float(np.hypot(*self.grid.offsets).max())  # pixels from the centre at scale 1
         support = None
-        if round_grid:
+        if thin:
             u, v = self.grid.offsets  # pixels at scale 1, in the ROI's own frame (axis a along u)
             inner, outer = _ROUND_GRID_SUPPORT
             support = np.clip((outer - np.hypot(u / roi.a, v / roi.b)) / (outer - inner), 0.0, 1.0)

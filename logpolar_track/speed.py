@@ -95,9 +95,10 @@ def _least_pass(name: str, frames: list[np.ndarray], roi: Ellipse, repeats: int,
     aside, as in timeit (the end-to-end figures are chosen the same way).
 
     The mean is what a frame rate is (frames over time). The median, reported until 2026-12-06, depends on where
-    the slower frames fall: ``lpcf`` learns on every second frame (about 0.4 ms more than the others), so its
-    median lay at the slowest of the quick frames or the quickest of the slow ones, 1.08 to 1.27 ms between runs
-    on one machine, where its mean stayed at 1.18 to 1.25."""
+    the slower frames fall: a tracker that does more on some frames (``lpcf`` learns on every second one) has its
+    median at the slowest of its quick frames or the quickest of its slow ones, which moves from run to run. The
+    mean counts a call slowed by other load in full, so measure on a quiet machine. The least mean and the least
+    median may come from different passes."""
     passes = [time_updates(name, frames, roi, **params) for _ in range(max(1, repeats))]
     return (min(statistics.fmean(times) for times, _ in passes),
             min(statistics.median(times) for times, _ in passes),
@@ -352,7 +353,7 @@ def speed_report(trackers: list[str] | None = None, *, n_frames: int = 100, repe
                        "video": "mp4v", "video_fps": VIDEO_FPS, "target_fps": TARGET_FPS,
                        "ellipse_ratio_max": ELLIPSE_RATIO_MAX, "end_to_end_fraction": END_TO_END_FRACTION,
                        "timing": "tracker: least over repeats passes of the mean update() wall time "
-                                 "(time.perf_counter) on decoded frames; "
+                                 "(time.perf_counter) on decoded frames, and of their medians (*_median_ms); "
                                  "baselines and runs: least wall time per frame of run_repeats calls"},
         "one_core": {"cv2_threads": cv2_threads, "numpy_fft": "numpy.fft (pocketfft, single-threaded)",
                      "pinned_cpu": cpu,

@@ -3,8 +3,8 @@
 The measurement follows issue 7: a 640x480 synthetic video of a textured object of radius 50 pixels (circle)
 or semi-axes 60 x 40 (ellipse), an 11x11 search window, one core (``cv2.setNumThreads(1)``; NumPy's FFT,
 pocketfft, is single-threaded; and, where the OS allows, every thread pinned to one CPU, because some OpenCV
-trackers call a multi-threaded BLAS). Tracker time is the mean ``update()`` only, on frames already decoded; the
-process' CPU time is compared with the wall time as a check.
+trackers call a multi-threaded BLAS). Tracker time is the mean time of ``update()`` alone, on frames already
+decoded; the process' CPU time is compared with the wall time as a check.
 
 Baselines: decoding the circle sequence written as an mp4v video, and decoding + re-encoding it as mp4v. End to
 end: :func:`~logpolar_track.pipeline.run_video` on the same video with the default tracker, once without a video
@@ -411,7 +411,8 @@ def format_report(doc: dict) -> str:
     if cpu is not None:
         core += f"; tracker CPU time / wall time <= {cpu:.2f}"
     lines += ["", core + ".",
-              f"Tracker: mean update() on decoded frames, least of {doc['parameters']['repeats']} passes; "
+              f"Tracker: mean update() over {doc['parameters']['n_frames'] - 1} decoded frames, least of "
+              f"{doc['parameters']['repeats']} passes; "
               f"end to end: least of {e['repeats']} runs, decoding in the reader's background thread.",
               f"Machine: {m['cpu_model']}{_with_extensions(m.get('vector_extensions'))}, {m['cpu_count']} logical "
               f"CPUs; Python {v['python']}, "

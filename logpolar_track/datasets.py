@@ -73,6 +73,11 @@ class Sequence:
         Frame images in order, for image sequences.
     played_backwards : bool
         Made by :meth:`backwards`: frame ``k`` is the ``k``-th image from the last.
+    frame_step : int
+        Made by :meth:`every`: frame ``k`` is frame ``first_frame + k * frame_step`` of the source (1: every frame).
+    first_frame : int
+        Frame of the video that is frame 0 here (videos made by :meth:`every`; image sequences keep their own
+        list of files instead).
     """
 
     name: str
@@ -86,6 +91,8 @@ class Sequence:
     fps: float
     frame_files: tuple | None = None
     played_backwards: bool = False
+    frame_step: int = 1
+    first_frame: int = 0
 
     def frames(self) -> Iterator[tuple[int, float, np.ndarray]]:
         """Yield ``(index, time_s, frame)`` for every frame, decoding one at a time (BGR uint8).
@@ -97,8 +104,14 @@ class Sequence:
         """
         if self.frame_files is not None:
             yield from _image_frames(self.frame_files, self.fps)
-        else:
+        elif self.frame_step == 1 and self.first_frame == 0:
             yield from _video_frames(self.path)
+        else:
+            # A video is decoded in order whatever is kept; time_s stays the video's own.
+            for index, time_s, frame in _video_frames(self.path):
+                offset = index - self.first_frame
+                if offset >= 0 and offset % self.frame_step == 0:
+                    yield offset // self.frame_step, time_s, frame
 
     def backwards(self) -> "Sequence":
         """This sequence played backwards, named ``<name>-backwards``: its frames from the last to the first, the
@@ -120,12 +133,36 @@ class Sequence:
         return replace(self, name=f"{self.name}-backwards", gt=gt, roi=gt.initial_roi(), start=gt.first_valid,
                        frame_files=self.frame_files[::-1], played_backwards=True)
 
+    def every(self, n: int) -> "Sequence":
+        """This sequence at 1/``n`` of its frame rate, named ``<name>-every<n>``: its frame ``start`` (the tracker's
+        first, with ground truth) and every ``n``-th frame after it, with their ground truth
+        (:meth:`~logpolar_track.evaluate.GroundTruth.every`). The same footage with ``n`` times the motion between
+        frames: a check of how a tracker's search copes with fast motion. ``n`` = 1 gives the sequence itself.
+
+        Raises
+        ------
+        UsageError
+            ``n`` below 1.
+        """
+        if n < 1:
+            raise UsageError(f"every takes a whole number of frames >= 1, got {n}")
+        if n == 1:
+            return self
+        gt = self.gt.every(self.start, n)
+        if self.frame_files is not None:
+            files = self.frame_files[self.start::n]
+            return replace(self, name=f"{self.name}-every{n}", gt=gt, start=0, n_frames=len(files), fps=self.fps / n,
+                           frame_files=files, frame_step=self.frame_step * n)
+        n_frames = -(-(self.n_frames - self.start) // n) if self.n_frames > self.start else 0
+        return replace(self, name=f"{self.name}-every{n}", gt=gt, start=0, n_frames=n_frames, fps=self.fps / n,
+                       frame_step=self.frame_step * n, first_frame=self.first_frame + self.start * self.frame_step)
+
     def describe(self) -> dict:
         """Plain-data summary for reports (JSON)."""
         return {"name": self.name, "kind": self.kind, "path": str(self.path), "ground_truth": str(self.gt_path),
                 "frames": self.n_frames, "scored_frames": int(self.gt.valid[: self.n_frames or None].sum()),
                 "rotated_ground_truth": bool(self.gt.rotated), "start_frame": self.start,
-                "roi": self.roi.to_spec(), "backwards": self.played_backwards}
+                "roi": self.roi.to_spec(), "backwards": self.played_backwards, "frame_step": self.frame_step}
 
 
 def _image_frames(files, fps: float):

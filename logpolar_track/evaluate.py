@@ -356,6 +356,17 @@ class GroundTruth:
         return GroundTruth(self.boxes[::-1].copy(), self.rotated, _relative(self.scale[::-1], valid, ratio=True),
                            rotation, self.rotation_period, ellipses, self.source)
 
+    def every(self, first: int, n: int) -> "GroundTruth":
+        """The ground truth of rows ``first``, ``first + n``, ``first + 2 n``, ... (every ``n``-th frame from
+        ``first``); ``scale`` and ``rotation_deg`` relative to the new first valid row. A rotation unwrapped over
+        every frame stays as unwrapped (every ``n``-th frame may turn by more than half a period between rows)."""
+        rows = slice(first, None, n)
+        valid = self.valid[rows]
+        rotation = None if self.rotation_deg is None else _relative(self.rotation_deg[rows], valid, ratio=False)
+        ellipses = None if self.ellipses is None else self.ellipses[rows].copy()
+        return GroundTruth(self.boxes[rows].copy(), self.rotated, _relative(self.scale[rows], valid, ratio=True),
+                           rotation, self.rotation_period, ellipses, self.source)
+
     def initial_roi(self) -> Ellipse:
         """The ellipse inscribed in the first valid box (the ``.gt.csv`` ellipse itself)."""
         i = self.first_valid

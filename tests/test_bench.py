@@ -395,6 +395,27 @@ def test_bench_plays_image_sequences_backwards(tmp_path):
     assert result["scale_error_median_pct"] < 3.0
 
 
+def test_bench_tracks_every_nth_frame(tmp_path, dataset):
+    # 4 px a frame: every third frame the object moves 12 px, and the rows say which frames were tracked.
+    roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
+    n = 16
+    poses = [Pose(60.0 + 4 * i, 70.0, 1.3 ** (i / (n - 1)), 0.0) for i in range(n)]
+    _otb_folder(tmp_path, "walk", poses, roi)
+    res = _run("bench", "--dataset", tmp_path, "--trackers", "lpcf", "--every", "3", "--json", "-", "-q")
+    assert res.exit_code == 0, res.stderr
+    doc = json.loads(res.stdout)
+    assert doc["parameters"]["every"] == 3
+    [seq], [result] = doc["sequences"], doc["results"]
+    assert seq["name"] == result["sequence"] == "walk-every3" and seq["frame_step"] == 3
+    assert result["frames_scored"] == 6 and result["success_rate"] == 1.0  # frames 0, 3, ..., 15
+    # Videos too, played forwards: every second of N_FRAMES frames.
+    res = _run("bench", "--dataset", dataset, "--trackers", "fixed", "--every", "2", "--json", "-", "-q")
+    assert res.exit_code == 0, res.stderr
+    doc = json.loads(res.stdout)
+    assert [r["sequence"] for r in doc["results"]] == ["alpha-every2", "beta-every2"]
+    assert {r["frames_scored"] for r in doc["results"]} == {(N_FRAMES + 1) // 2}
+
+
 def test_bench_plays_only_image_sequences_backwards(dataset):
     res = _run("bench", "--dataset", dataset, "--trackers", "fixed", "--backwards")
     assert res.exit_code == 2 and res.stdout == ""
@@ -403,14 +424,16 @@ def test_bench_plays_only_image_sequences_backwards(dataset):
         "video; give --dataset with such folders"]
 
 
-SPEED_TAKES_NO = ("no --dataset, --per-frame, --plot, --starts, --backwards, --threads, --param, --jobs or "
-                  "--scheduler")
+SPEED_TAKES_NO = ("no --dataset, --per-frame, --plot, --starts, --backwards, --every, --threads, --param, --jobs "
+                  "or --scheduler")
 
 
 @pytest.mark.parametrize("args, message", [
     (["--starts", "34"], "1<=x<=33"),
     (["--starts", "2", "--speed"], SPEED_TAKES_NO),
     (["--backwards", "--speed"], SPEED_TAKES_NO),
+    (["--every", "2", "--speed"], SPEED_TAKES_NO),
+    (["--every", "0"], "x>=1"),
     (["--threads", "2", "--speed"], SPEED_TAKES_NO),
     (["--param", "window=9", "--speed"], SPEED_TAKES_NO),
     (["--jobs", "2", "--speed"], SPEED_TAKES_NO),
@@ -588,10 +611,12 @@ def test_plot_says_what_was_run(dataset, tmp_path, monkeypatch):
         assert res.exit_code == 0, res.stderr
     roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
     _otb_folder(tmp_path / "otb", "still", [Pose(60.0, 70.0, 1.0, 0.0)] * 4, roi)
-    res = _run("bench", "--dataset", tmp_path / "otb", "--trackers", "fixed", "--backwards", "--plot",
-               tmp_path / "p.png", "--overwrite", "-q")
-    assert res.exit_code == 0, res.stderr
-    assert captions == ["2 sequences", "2 sequences, means over 2 starts", "1 sequence played backwards"]
+    for extra in (["--backwards"], ["--backwards", "--every", "2"]):
+        res = _run("bench", "--dataset", tmp_path / "otb", "--trackers", "fixed", "--plot", tmp_path / "p.png",
+                   "--overwrite", "-q", *extra)
+        assert res.exit_code == 0, res.stderr
+    assert captions == ["2 sequences", "2 sequences, means over 2 starts", "1 sequence played backwards",
+                        "1 sequence played backwards, every 2nd frame"]
 
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_videos"

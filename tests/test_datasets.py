@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from logpolar_track.datasets import discover, load_ground_truth
-from logpolar_track.errors import InputError
+from logpolar_track.errors import InputError, UsageError
 from logpolar_track.evaluate import rotated_box_corners
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -59,6 +59,49 @@ def test_a_sequence_played_backwards_starts_on_its_last_frame_with_ground_truth(
     assert (back.roi.cx, back.roi.cy, back.roi.a, back.roi.b) == (17, 23, 5, 3)  # line 4, 1-based x=13 -> 12, +5
     assert [int(f.mean()) for _, _, f in back.frames()] == pytest.approx([70, 60, 50, 40, 30, 20, 10], abs=2)
     assert back.describe()["start_frame"] == 3 and back.describe()["backwards"] and not seq.describe()["backwards"]
+
+
+def test_every_nth_frame_of_an_image_sequence_from_its_first_with_ground_truth(tmp_path):
+    # Frame 0 has a NaN line: the tracker starts on frame 1, so every third frame is 1, 4, 7 (and no frame 8 line).
+    lines = ["NaN,NaN,NaN,NaN"] + [f"{10 + i},21,{10 + i},6" for i in range(1, 8)]
+    (seq,) = discover(_otb(tmp_path, "walk", 9, lines))
+    third = seq.every(3)
+    assert (third.name, third.start, third.n_frames, third.fps, third.frame_step) == ("walk-every3", 0, 3, 10.0, 3)
+    assert [int(f.mean()) for _, _, f in third.frames()] == pytest.approx([20, 50, 80], abs=2)
+    assert [i for i, _, _ in third.frames()] == [0, 1, 2]
+    assert third.gt.boxes[:, 2].tolist() == [11, 14, 17]  # the widths of lines 2, 5 and 8
+    assert third.gt.scale.tolist() == pytest.approx([1.0, math.sqrt(14 / 11), math.sqrt(17 / 11)])
+    assert third.roi == seq.roi and third.describe()["frame_step"] == 3 and seq.describe()["frame_step"] == 1
+    # Played backwards first, then every second frame: lines 8, 6, 4, 2.
+    back = seq.backwards().every(2)
+    assert back.name == "walk-backwards-every2" and back.gt.boxes[:, 2].tolist() == [17, 15, 13, 11]
+    assert seq.every(1) is seq
+    with pytest.raises(UsageError, match="every takes a whole number of frames >= 1, got 0"):
+        seq.every(0)
+
+
+def test_every_nth_frame_of_a_video(tmp_path):
+    frames = [np.full((40, 64, 3), 20 * i, np.uint8) for i in range(8)]
+    writer = cv2.VideoWriter(str(tmp_path / "disc.avi"), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (64, 40))
+    for f in frames:
+        writer.write(f)
+    writer.release()
+    # No ground truth on frame 0 and no .roi: the tracker starts on frame 1.
+    (tmp_path / "disc.gt.csv").write_text("frame,cx,cy,a,b,angle_deg,scale,rotation_deg\n"
+                                          + "".join(f"{i},{30 + i},20,10,10,0,1,{5 * i}\n" for i in range(1, 8)))
+    (seq,) = discover(tmp_path)
+    assert seq.start == 1
+    half = seq.every(2)
+    assert (half.name, half.start, half.n_frames, half.first_frame, half.fps) == ("disc-every2", 0, 4, 1, 12.5)
+    kept = list(half.frames())
+    assert [i for i, _, _ in kept] == [0, 1, 2, 3]
+    assert [t for _, t, _ in kept] == pytest.approx([0.04, 0.12, 0.2, 0.28])  # the video's own times
+    assert [int(f.mean()) for _, _, f in kept] == pytest.approx([20, 60, 100, 140], abs=3)
+    assert half.gt.rotation_deg.tolist() == [0, 10, 20, 30]  # from frame 1's 5 degrees
+    # Every second frame of that: frames 1 and 5 of the video.
+    quarter = half.every(2)
+    assert (quarter.frame_step, quarter.first_frame) == (4, 1)
+    assert [int(f.mean()) for _, _, f in quarter.frames()] == pytest.approx([20, 100], abs=3)
 
 
 def test_spaces_and_more_lines_than_frames(tmp_path):

@@ -52,6 +52,7 @@ Examples:
   lptrack bench --trackers cv-csrt,cv-kcf --json - > res.json
   lptrack bench --dataset ~/data/otb --trackers lpcf,cv-csrt --starts 13 -j 2
   lptrack bench --dataset ~/data/otb --trackers lpcf,cv-csrt --backwards
+  lptrack bench --dataset ~/data/otb --trackers lpcf,cv-csrt --every 3
   lptrack bench --dataset ~/data/otb --trackers lpcf --param padding=1.5
 """
 
@@ -84,6 +85,10 @@ Examples:
               help="Play each sequence backwards instead, from its last frame with ground truth (image sequences "
                    "only; rows named NAME-backwards): the same footage as other tracking problems, a check on "
                    "sequences a tracker was not tuned on.")
+@click.option("--every", type=click.IntRange(min=1), default=1, show_default=True, metavar="N",
+              help="Track every N-th frame only, from the first with ground truth (rows named NAME-everyN): the "
+                   "same footage at 1/N of its frame rate, N times the motion between frames. After --backwards "
+                   "when both are given.")
 @click.option("--threads", type=click.IntRange(min=1), default=None, metavar="N",
               help="OpenCV threads per tracker. Default 1: every tracker, lptrack's and OpenCV's, on one core, so "
                    "frames/s compare per core (more lets OpenCV's CSRT spread its work over cores).")
@@ -95,8 +100,8 @@ Examples:
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no notes on stderr.")
 def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, ...], json_out: str | None,
           per_frame: bool,
-          plot_out: Path | None, jobs: int, scheduler: str | None, starts: int, backwards: bool, threads: int | None,
-          quiet: bool, speed: bool, overwrite: bool) -> None:
+          plot_out: Path | None, jobs: int, scheduler: str | None, starts: int, backwards: bool, every: int,
+          threads: int | None, quiet: bool, speed: bool, overwrite: bool) -> None:
     """Run trackers over sequences with ground truth and compare them.
 
     Prints one row per sequence and tracker and a mean row per tracker:
@@ -111,10 +116,11 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     """
     jobs_given = click.get_current_context().get_parameter_source("jobs") is not click.core.ParameterSource.DEFAULT
     if speed:
-        if (datasets or per_frame or plot_out is not None or starts != 1 or backwards or threads is not None
-                or params or jobs_given or scheduler is not None):
+        if (datasets or per_frame or plot_out is not None or starts != 1 or backwards or every != 1
+                or threads is not None or params or jobs_given or scheduler is not None):
             raise UsageError("--speed times trackers on a synthetic video on one core; it takes no --dataset, "
-                             "--per-frame, --plot, --starts, --backwards, --threads, --param, --jobs or --scheduler")
+                             "--per-frame, --plot, --starts, --backwards, --every, --threads, --param, --jobs or "
+                             "--scheduler")
     check_jobs_or_scheduler(jobs_given, scheduler)
     # Outputs are checked before the work (a benchmark may run for hours), as `lptrack run` checks its own.
     _check_json_out(json_out, overwrite)
@@ -143,6 +149,7 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
             raise UsageError(f"--backwards plays image sequences only (OTB, VOT, UAV123 folders), and {videos[0]} is a "
                              "video; give --dataset with such folders")
         sequences = [s.backwards() for s in sequences]
+    sequences = [s.every(every) for s in sequences]
     _note_skipped(skipped, quiet)
     threads = TRACKING_OPENCV_THREADS if threads is None else threads
 
@@ -167,7 +174,8 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     summary = summarise(results, names)
     table = format_table(results, summary)
     parameters = {"datasets": [str(d) for d in datasets], "trackers": names, "jobs": jobs,
-                  "scheduler": scheduler, "starts": starts, "backwards": backwards, "opencv_threads": threads,
+                  "scheduler": scheduler, "starts": starts, "backwards": backwards, "every": every,
+                  "opencv_threads": threads,
                   "tracker_params": {name: chosen for name, chosen in tuning.items() if chosen},
                   "start_perturbations": [list(p) for p in STARTS[:starts]]}
     failed = [r for r in results if r["error"]]
@@ -183,12 +191,19 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
         # Which run a plot shows is not in its curves: say it, as the table's row names do.
         caption = f"{len(sequences)} sequence{'s' if len(sequences) != 1 else ''}"
         caption += " played backwards" if backwards else ""
+        caption += f", every {_ordinal(every)} frame" if every > 1 else ""
         caption += f", means over {starts} starts" if starts > 1 else ""
         plot_curves(summary, plot_out, caption)
     for r in failed:
         click.echo(f"lptrack: error: {r['tracker']} failed on {r['sequence']}: {r['error']}", err=True)
     if failed:
         sys.exit(EXIT_FAILURE)
+
+
+def _ordinal(n: int) -> str:
+    """``2nd``, ``3rd``, ``11th``, ``21st``..."""
+    suffix = "th" if 10 <= n % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(n % 10, "th")
+    return f"{n}{suffix}"
 
 
 def _check_json_out(json_out: str | None, overwrite: bool) -> None:

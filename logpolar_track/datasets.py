@@ -74,10 +74,10 @@ class Sequence:
     played_backwards : bool
         Made by :meth:`backwards`: frame ``k`` is the ``k``-th image from the last.
     frame_step : int
-        Made by :meth:`every`: frame ``k`` is frame ``first_frame + k * frame_step`` of the source (1: every frame).
+        Made by :meth:`every`: frame ``k`` is frame ``first_frame + k * frame_step`` of the source as played
+        (backwards too, when :meth:`backwards` came first; 1: every frame).
     first_frame : int
-        Frame of the video that is frame 0 here (videos made by :meth:`every`; image sequences keep their own
-        list of files instead).
+        The frame of the source, as played, that is frame 0 here (0 unless made by :meth:`every`).
     """
 
     name: str
@@ -103,7 +103,8 @@ class Sequence:
             If the video cannot be opened or a frame image cannot be read.
         """
         if self.frame_files is not None:
-            yield from _image_frames(self.frame_files, self.fps)
+            # Times as the source's: frame k was image first_frame + k * frame_step at fps * frame_step.
+            yield from _image_frames(self.frame_files, self.fps, self.first_frame / (self.fps * self.frame_step))
         elif self.frame_step == 1 and self.first_frame == 0:
             yield from _video_frames(self.path)
         else:
@@ -135,7 +136,8 @@ class Sequence:
 
     def every(self, n: int) -> "Sequence":
         """This sequence at 1/``n`` of its frame rate, named ``<name>-every<n>``: its frame ``start`` (the tracker's
-        first, with ground truth) and every ``n``-th frame after it, with their ground truth
+        first: the first with ground truth, or frame 0 with a ``.roi`` sidecar) and every ``n``-th frame after it,
+        with their ground truth
         (:meth:`~logpolar_track.evaluate.GroundTruth.every`). The same footage with ``n`` times the motion between
         frames: a check of how a tracker's search copes with fast motion. ``n`` = 1 gives the sequence itself.
 
@@ -149,23 +151,25 @@ class Sequence:
         if n == 1:
             return self
         gt = self.gt.every(self.start, n)
+        first = self.first_frame + self.start * self.frame_step
         if self.frame_files is not None:
             files = self.frame_files[self.start::n]
             return replace(self, name=f"{self.name}-every{n}", gt=gt, start=0, n_frames=len(files), fps=self.fps / n,
-                           frame_files=files, frame_step=self.frame_step * n)
+                           frame_files=files, frame_step=self.frame_step * n, first_frame=first)
         n_frames = -(-(self.n_frames - self.start) // n) if self.n_frames > self.start else 0
         return replace(self, name=f"{self.name}-every{n}", gt=gt, start=0, n_frames=n_frames, fps=self.fps / n,
-                       frame_step=self.frame_step * n, first_frame=self.first_frame + self.start * self.frame_step)
+                       frame_step=self.frame_step * n, first_frame=first)
 
     def describe(self) -> dict:
         """Plain-data summary for reports (JSON)."""
         return {"name": self.name, "kind": self.kind, "path": str(self.path), "ground_truth": str(self.gt_path),
                 "frames": self.n_frames, "scored_frames": int(self.gt.valid[: self.n_frames or None].sum()),
                 "rotated_ground_truth": bool(self.gt.rotated), "start_frame": self.start,
-                "roi": self.roi.to_spec(), "backwards": self.played_backwards, "frame_step": self.frame_step}
+                "roi": self.roi.to_spec(), "backwards": self.played_backwards, "frame_step": self.frame_step,
+                "first_frame": self.first_frame}
 
 
-def _image_frames(files, fps: float):
+def _image_frames(files, fps: float, first_time_s: float = 0.0):
     import cv2
 
     from .video import opencv_path
@@ -174,7 +178,7 @@ def _image_frames(files, fps: float):
         frame = cv2.imread(opencv_path(path, "image"), cv2.IMREAD_COLOR)
         if frame is None:
             raise VideoError(f"cannot read frame image '{path}'; expected a JPEG/PNG image")
-        yield i, i / fps, frame
+        yield i, first_time_s + i / fps, frame
 
 
 def _video_frames(path: Path):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import inspect
 import math
+import pickle
 from pathlib import Path
 
 import cv2
@@ -71,7 +72,12 @@ def test_every_nth_frame_of_an_image_sequence_from_its_first_with_ground_truth(t
     assert [i for i, _, _ in third.frames()] == [0, 1, 2]
     assert third.gt.boxes[:, 2].tolist() == [11, 14, 17]  # the widths of lines 2, 5 and 8
     assert third.gt.scale.tolist() == pytest.approx([1.0, math.sqrt(14 / 11), math.sqrt(17 / 11)])
-    assert third.roi == seq.roi and third.describe()["frame_step"] == 3 and seq.describe()["frame_step"] == 1
+    assert third.roi == seq.roi and seq.describe()["frame_step"] == 1
+    assert (third.describe()["frame_step"], third.describe()["first_frame"]) == (3, 1)  # frame 0 is image 1
+    assert [t for _, t, _ in third.frames()] == pytest.approx([1 / 30, 4 / 30, 7 / 30])  # the images' own times
+    sent = pickle.loads(pickle.dumps(third))  # as Dask sends it to its workers
+    assert (sent.frame_files, sent.frame_step, sent.first_frame) == (third.frame_files, 3, 1)
+    assert np.array_equal(sent.gt.boxes, third.gt.boxes)
     # Played backwards first, then every second frame: lines 8, 6, 4, 2.
     back = seq.backwards().every(2)
     assert back.name == "walk-backwards-every2" and back.gt.boxes[:, 2].tolist() == [17, 15, 13, 11]
@@ -102,6 +108,13 @@ def test_every_nth_frame_of_a_video(tmp_path):
     quarter = half.every(2)
     assert (quarter.frame_step, quarter.first_frame) == (4, 1)
     assert [int(f.mean()) for _, _, f in quarter.frames()] == pytest.approx([20, 100], abs=3)
+    # With a .roi sidecar the tracker starts on frame 0, ground truth or not.
+    (tmp_path / "disc.roi").write_text("30,20,9\n")
+    (seq,) = discover(tmp_path)
+    third = pickle.loads(pickle.dumps(seq.every(3)))
+    assert (third.start, third.first_frame, third.n_frames) == (0, 0, 3)
+    assert [int(f.mean()) for _, _, f in third.frames()] == pytest.approx([0, 60, 120], abs=3)
+    assert third.gt.valid.tolist() == [False, True, True] and third.gt.rotation_deg[1:].tolist() == [0, 15]
 
 
 def test_spaces_and_more_lines_than_frames(tmp_path):

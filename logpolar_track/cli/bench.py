@@ -86,9 +86,10 @@ Examples:
                    "only; rows named NAME-backwards): the same footage as other tracking problems, a check on "
                    "sequences a tracker was not tuned on.")
 @click.option("--every", type=click.IntRange(min=1), default=1, show_default=True, metavar="N",
-              help="Track every N-th frame only, from the first with ground truth (rows named NAME-everyN): the "
-                   "same footage at 1/N of its frame rate, N times the motion between frames. After --backwards "
-                   "when both are given.")
+              help="Track every N-th frame only, from the tracker's first frame (the first with ground truth, or "
+                   "frame 0 with a .roi sidecar; rows named NAME-everyN): the same footage at 1/N of its frame rate, "
+                   "N times the motion between frames. With --backwards: every N-th frame of the sequence played "
+                   "backwards.")
 @click.option("--threads", type=click.IntRange(min=1), default=None, metavar="N",
               help="OpenCV threads per tracker. Default 1: every tracker, lptrack's and OpenCV's, on one core, so "
                    "frames/s compare per core (more lets OpenCV's CSRT spread its work over cores).")

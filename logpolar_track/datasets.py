@@ -137,9 +137,9 @@ class Sequence:
     def every(self, n: int) -> "Sequence":
         """This sequence at 1/``n`` of its frame rate, named ``<name>-every<n>``: its frame ``start`` (the tracker's
         first: the first with ground truth, or frame 0 with a ``.roi`` sidecar) and every ``n``-th frame after it,
-        with their ground truth
-        (:meth:`~logpolar_track.evaluate.GroundTruth.every`). The same footage with ``n`` times the motion between
-        frames: a check of how a tracker's search copes with fast motion. ``n`` = 1 gives the sequence itself.
+        with their ground truth (:meth:`~logpolar_track.evaluate.GroundTruth.every`). The same footage with ``n``
+        times the motion between frames: a check of how a tracker's search copes with fast motion. ``n`` = 1 gives
+        the sequence itself.
 
         Raises
         ------

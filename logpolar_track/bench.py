@@ -394,7 +394,9 @@ def format_table(results: list[dict], summary: list[dict], *, speed: bool = True
         rows.append(None)
         n_seq = max(s["sequences"] for s in summary)
         for s in summary:
-            rows.append([f"mean ({n_seq})", s["tracker"]] + [_cell(s.get(key), fmt) for _, key, fmt in columns])
+            # A failed run is scored over the frames it reached: say so where it enters the mean too.
+            tracker = s["tracker"] + (f" ({s['errors']} failed)" if s.get("errors") else "")
+            rows.append([f"mean ({n_seq})", tracker] + [_cell(s.get(key), fmt) for _, key, fmt in columns])
     return _aligned(header, rows, left=2)
 
 

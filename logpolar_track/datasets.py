@@ -78,6 +78,9 @@ class Sequence:
         (backwards too, when :meth:`backwards` came first; 1: every frame).
     first_frame : int
         The frame of the source, as played, that is frame 0 here (0 unless made by :meth:`every`).
+    notes : tuple of str
+        What may put the ground truth out of step with the frames, found on reading the folder (a line count other
+        than the image count, image numbers that skip): for a report to show.
     """
 
     name: str
@@ -93,6 +96,7 @@ class Sequence:
     played_backwards: bool = False
     frame_step: int = 1
     first_frame: int = 0
+    notes: tuple = ()
 
     def frames(self) -> Iterator[tuple[int, float, np.ndarray]]:
         """Yield ``(index, time_s, frame)`` for every frame, decoding one at a time (BGR uint8).
@@ -195,14 +199,40 @@ def _natural_key(path: Path):
 def _images_in(folder: Path) -> list[Path]:
     if not folder.is_dir():
         return []
-    return sorted((p for p in folder.iterdir() if p.suffix.lower() in IMAGE_EXTENSIONS and p.is_file()),
+    # Hidden files (macOS's ._0001.jpg beside 0001.jpg, copied from its disks) are not frames.
+    return sorted((p for p in folder.iterdir()
+                   if p.suffix.lower() in IMAGE_EXTENSIONS and not p.name.startswith(".") and p.is_file()),
                   key=_natural_key)
 
 
 def _image_sequence(name: str, kind: str, folder: Path, gt_path: Path, files: list[Path]) -> Sequence:
-    gt = read_box_text(gt_path, source=kind).truncated(len(files))
+    full = read_box_text(gt_path, source=kind)
+    gt = full.truncated(len(files))
     start = gt.first_valid
-    return Sequence(name, kind, folder, gt_path, gt, gt.initial_roi(), start, len(files), IMAGE_FPS, tuple(files))
+    return Sequence(name, kind, folder, gt_path, gt, gt.initial_roi(), start, len(files), IMAGE_FPS, tuple(files),
+                    notes=_alignment_notes(gt_path, len(full), files))
+
+
+def _alignment_notes(gt_path: Path, n_lines: int, files: list[Path]) -> tuple[str, ...]:
+    """What may put a folder's ground truth out of step with its images, which are matched line ``k`` to the
+    ``k``-th image: a line count other than the image count, or image numbers that skip (a missing image moves every
+    later line onto the next image's frame)."""
+    notes = []
+    if n_lines < len(files):
+        notes.append(f"{gt_path} has {n_lines} lines for {len(files)} images; line k is matched to the k-th image "
+                     f"from the first, and the images after the last line are not scored (an OTB sequence whose "
+                     f"ground truth starts later, as David's at image 300, needs its images from there only)")
+    elif n_lines > len(files):
+        notes.append(f"{gt_path} has {n_lines} lines for {len(files)} images; line k is matched to the k-th image, "
+                     f"and the lines after the last image are not used")
+    numbers = [re.search(r"(\d+)$", f.stem) for f in files]
+    if all(numbers) and len(numbers) > 1:
+        values = [int(m.group(1)) for m in numbers]
+        gap = next((i for i in range(1, len(values)) if values[i] != values[i - 1] + 1), None)
+        if gap is not None:
+            notes.append(f"{files[gap].parent}: image numbers skip from {files[gap - 1].name} to {files[gap].name}; "
+                         f"lines are still matched to images in order")
+    return tuple(notes)
 
 
 def _video_info(path: Path) -> tuple[int, float]:

@@ -416,6 +416,39 @@ def test_bench_tracks_every_nth_frame(tmp_path, dataset):
     assert {r["frames_scored"] for r in doc["results"]} == {(N_FRAMES + 1) // 2}
 
 
+def test_a_failed_run_is_marked_in_the_mean_it_enters(tmp_path):
+    """A run stopped by an error is scored over the frames it reached; the mean row says one of its runs failed."""
+    roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
+    folder = _otb_folder(tmp_path, "walk", [Pose(60.0 + 2 * i, 70.0, 1.0, 0.0) for i in range(8)], roi)
+    (folder / "img" / "0005.jpg").write_bytes(b"not a JPEG")
+    res = _run("bench", "--dataset", tmp_path, "--trackers", "fixed", "-q")
+    assert res.exit_code == 1 and "fixed failed on walk: VideoError: cannot read frame image" in res.stderr
+    table = res.stdout.splitlines()
+    assert table[2].split()[:3] == ["walk", "fixed", "(failed)"]
+    assert table[-1].split()[:5] == ["mean", "(1)", "fixed", "(1", "failed)"]
+
+
+def test_bench_notes_ground_truth_out_of_step_with_its_images(tmp_path):
+    roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
+    folder = _otb_folder(tmp_path, "walk", [Pose(60.0 + 2 * i, 70.0, 1.0, 0.0) for i in range(8)], roi)
+    (folder / "img" / "0004.jpg").unlink()  # a missing image: lines 4 to 8 now fall on the next images
+    (folder / "img" / "._0001.jpg").write_bytes(b"macOS resource fork")  # hidden: not a frame
+    res = _run("bench", "--dataset", tmp_path, "--trackers", "fixed")
+    assert res.exit_code == 0, res.stderr
+    notes = [line for line in res.stderr.splitlines() if line.startswith("lptrack: note:")]
+    assert notes == [
+        f"lptrack: note: {folder / 'groundtruth_rect.txt'} has 8 lines for 7 images; line k is matched to the k-th "
+        f"image, and the lines after the last image are not used",
+        f"lptrack: note: {folder / 'img'}: image numbers skip from 0003.jpg to 0005.jpg; lines are still matched "
+        f"to images in order"]
+    assert "lptrack: note:" not in _run("bench", "--dataset", tmp_path, "--trackers", "fixed", "-q").stderr
+    # Every 100th frame leaves the first alone: nothing to track.
+    res = _run("bench", "--dataset", tmp_path, "--trackers", "fixed", "--every", "100")
+    assert res.exit_code == 2 and res.stdout == ""
+    assert res.stderr.splitlines() == ["lptrack: error: --every 100 leaves 1 frame of 'walk-every100', nothing to "
+                                       "track; give a smaller N"]
+
+
 def test_bench_plays_only_image_sequences_backwards(dataset):
     res = _run("bench", "--dataset", dataset, "--trackers", "fixed", "--backwards")
     assert res.exit_code == 2 and res.stdout == ""

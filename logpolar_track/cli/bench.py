@@ -151,7 +151,15 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
                              "video; give --dataset with such folders")
         sequences = [s.backwards() for s in sequences]
     sequences = [s.every(every) for s in sequences]
+    # A video's frame count is its container's, 0 when unknown: then nothing is said before the run.
+    short = next((s for s in sequences if s.n_frames == 1), None) if every > 1 else None
+    if short is not None:
+        raise UsageError(f"--every {every} leaves {short.n_frames} frame of '{short.name}', nothing to track; give "
+                         f"a smaller N")
     _note_skipped(skipped, quiet)
+    if not quiet:
+        for note in dict.fromkeys(note for s in sequences for note in s.notes):
+            click.echo(f"lptrack: note: {note}", err=True)
     threads = TRACKING_OPENCV_THREADS if threads is None else threads
 
     show_progress = not quiet and sys.stderr.isatty()

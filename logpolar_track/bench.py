@@ -26,7 +26,7 @@ from typing import Callable, Iterable, Mapping
 import numpy as np
 
 from . import __version__
-from .datasets import Sequence, discover
+from .datasets import SEARCH_DEPTH, Sequence, discover
 from .errors import OutputError, UsageError
 from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
                        auc, score_track)
@@ -146,14 +146,16 @@ def collect_sequences(datasets: Iterable) -> list[Sequence]:
     for dataset in datasets:
         found = discover(dataset)
         if not found:
-            raise UsageError(f"no sequences found in '{dataset}'; expected videos with .gt.csv sidecars, or "
-                             "OTB (img/ + groundtruth_rect.txt), VOT (groundtruth.txt + frames), UAV123 "
-                             "(img/ + <name>.txt) folders, or a folder of such folders")
+            raise UsageError(f"no sequences found in '{dataset}' (searched {SEARCH_DEPTH} folders down); expected "
+                             "videos with .gt.csv sidecars, or OTB (img/ + groundtruth_rect.txt), VOT (groundtruth.txt "
+                             "+ frames), UAV123 (img/ + <name>.txt) folders, or a folder of such folders")
         sequences.extend(found)
     names = [s.name for s in sequences]
     dupes = sorted({n for n in names if names.count(n) > 1})
     if dupes:
-        raise UsageError(f"several sequences are called {', '.join(dupes)}; give datasets whose names differ")
+        where = " and ".join(f"'{s.path}'" for s in sequences if s.name == dupes[0])
+        more = f" (also shared: {', '.join(dupes[1:])})" if len(dupes) > 1 else ""
+        raise UsageError(f"several sequences are called {dupes[0]}: {where}{more}; give datasets whose names differ")
     return sequences
 
 

@@ -42,7 +42,8 @@ from .pipeline import read_roi_sidecar
 IMAGE_FPS = 30.0
 IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff")
 VIDEO_EXTENSIONS = (".mp4", ".avi", ".mkv", ".mov", ".webm", ".m4v")
-_MAX_DEPTH = 3
+#: How many folders below a dataset folder sequences are looked for (`discover`).
+SEARCH_DEPTH = 3
 
 
 @dataclass
@@ -332,7 +333,7 @@ def discover(path) -> list[Sequence]:
         if path.suffix.lower() in VIDEO_EXTENSIONS:
             return [video_sequence(path)]
         raise UsageError(f"dataset '{path}' is a file; give a folder of sequences or a video with a .gt.csv")
-    return _discover(path, _MAX_DEPTH)
+    return _discover(path, SEARCH_DEPTH)
 
 
 def _discover(folder: Path, depth: int) -> list[Sequence]:

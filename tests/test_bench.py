@@ -449,6 +449,24 @@ def test_bench_notes_ground_truth_out_of_step_with_its_images(tmp_path):
                                        "track; give a smaller N"]
 
 
+def test_dataset_errors_say_where(tmp_path, dataset):
+    roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
+    deep = tmp_path / "deep"
+    _otb_folder(deep / "a" / "b" / "c" / "d", "walk", [Pose(60.0, 70.0, 1.0, 0.0)] * 3, roi)
+    res = _run("bench", "--dataset", deep, "--trackers", "fixed")
+    assert res.exit_code == 2 and res.stderr.startswith(f"lptrack: error: no sequences found in '{deep}' (searched 3 "
+                                                        f"folders down); expected")
+    twin = tmp_path / "twin"
+    twin.mkdir()
+    (twin / "alpha.avi").symlink_to(dataset / "alpha.avi")
+    for suffix in (".gt.csv", ".roi"):
+        (twin / f"alpha{suffix}").write_text((dataset / f"alpha{suffix}").read_text())
+    res = _run("bench", "--dataset", dataset, "--dataset", twin, "--trackers", "fixed")
+    assert res.exit_code == 2 and res.stderr.splitlines() == [
+        f"lptrack: error: several sequences are called alpha: '{dataset / 'alpha.avi'}' and '{twin / 'alpha.avi'}'; "
+        f"give datasets whose names differ"]
+
+
 def test_bench_plays_only_image_sequences_backwards(dataset):
     res = _run("bench", "--dataset", dataset, "--trackers", "fixed", "--backwards")
     assert res.exit_code == 2 and res.stdout == ""

@@ -350,17 +350,17 @@ class GroundTruth:
     def reversed(self) -> "GroundTruth":
         """The ground truth of the frames played backwards: row ``k`` is row ``n - 1 - k``, and ``scale`` and
         ``rotation_deg`` are relative to the new first valid row (the old last one)."""
-        valid = self.valid[::-1]
-        rotation = None if self.rotation_deg is None else _relative(self.rotation_deg[::-1], valid, ratio=False)
-        ellipses = None if self.ellipses is None else self.ellipses[::-1].copy()
-        return GroundTruth(self.boxes[::-1].copy(), self.rotated, _relative(self.scale[::-1], valid, ratio=True),
-                           rotation, self.rotation_period, ellipses, self.source)
+        return self._rows(slice(None, None, -1))
 
     def every(self, first: int, n: int) -> "GroundTruth":
         """The ground truth of rows ``first``, ``first + n``, ``first + 2 n``, ... (every ``n``-th frame from
         ``first``); ``scale`` and ``rotation_deg`` relative to the new first valid row. A rotation unwrapped over
         every frame stays as unwrapped (every ``n``-th frame may turn by more than half a period between rows)."""
-        rows = slice(first, None, n)
+        return self._rows(slice(first, None, n))
+
+    def _rows(self, rows: slice) -> "GroundTruth":
+        """The ground truth of ``rows``, in their order, with ``scale`` and ``rotation_deg`` relative to its first
+        valid row."""
         valid = self.valid[rows]
         rotation = None if self.rotation_deg is None else _relative(self.rotation_deg[rows], valid, ratio=False)
         ellipses = None if self.ellipses is None else self.ellipses[rows].copy()

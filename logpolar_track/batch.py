@@ -154,23 +154,40 @@ def is_video_name(path: Path) -> bool:
             and not path.stem.endswith(OUTPUT_STEM_SUFFIX))
 
 
-def mirrored_output_base(video) -> Path:
+def mirrored_output_base(video, folder_videos: dict[Path, dict[str, set[str]]] | None = None) -> Path:
     """What ``--parents`` names ``video``'s outputs after, suffixes to come: its path as given
     (:func:`~logpolar_track.pipeline.mirrored_path`) with its stem for a name, or its whole file name where another
     video in its folder has that stem (``a.mp4`` beside ``a.avi``: ``a.mp4.lptrack.csv``). The folder decides, not
-    the other videos of the run, so that runs given the two apart name them as one run does."""
+    the other videos of the run, so that runs given the two apart name them as one run does.
+
+    ``folder_videos``, if given, keeps each folder's videos once read (:func:`_videos_by_stem`), so that a batch
+    reads a folder once rather than once per video in it."""
     video = Path(video)
     mirrored = mirrored_path(video)
     stem = video_stem(video)
     if not is_image_sequence(video):
-        try:
-            twin = any(entry.name != video.name and Path(entry.name).stem == stem and is_video_name(Path(entry.name))
-                       for entry in os.scandir(video.parent))
-        except OSError:
-            twin = False
-        if twin:
+        folder = video.parent
+        if folder_videos is None or folder not in folder_videos:
+            by_stem = _videos_by_stem(folder)
+            if folder_videos is not None:
+                folder_videos[folder] = by_stem
+        else:
+            by_stem = folder_videos[folder]
+        if by_stem.get(stem, set()) - {video.name}:
             return mirrored
     return mirrored.with_name(stem)
+
+
+def _videos_by_stem(folder: Path) -> dict[str, set[str]]:
+    """The video file names of ``folder`` (:func:`is_video_name`) by stem; empty where it cannot be read."""
+    by_stem: dict[str, set[str]] = {}
+    try:
+        for entry in os.scandir(folder):
+            if is_video_name(Path(entry.name)):
+                by_stem.setdefault(Path(entry.name).stem, set()).add(entry.name)
+    except OSError:
+        pass
+    return by_stem
 
 
 def video_key(path) -> Path:
@@ -543,11 +560,12 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
         by_stem[stem] = by_stem.get(stem, 0) + 1
     jobs, order, settled = [], [], {}
     claimed: dict[Path, str] = {}
+    folder_videos: dict[Path, dict[str, set[str]]] = {}  # each input folder read once (--parents)
     for item, rel, stem in zip(videos, relative, stems):
         label = str(item.path)
         order.append(label)
         # Two inputs sharing a stem in one folder keep their extension in the output names.
-        base = mirrored_output_base(item.path) if parents else stem if by_stem[stem] == 1 else rel
+        base = mirrored_output_base(item.path, folder_videos) if parents else stem if by_stem[stem] == 1 else rel
         folder = out_dir / base.parent
         video_out = folder / f"{base.name}{VIDEO_OUT_SUFFIX}" if video else None
         csv_out = None if stream else folder / f"{base.name}{_data_suffix(data_format)}"

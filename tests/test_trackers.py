@@ -255,21 +255,23 @@ def test_every_accepted_frame_layout_tracks_alike(name):
     centres = {}
     later = _frame_kinds(moved)
     for kind, start in _frame_kinds(first).items():
-        # MIL draws its samples from OpenCV's global random generator: each layout starts from the same state, or
-        # what earlier tests drew moves its box by a pixel or two.
+        # MIL draws its samples from OpenCV's global random generator: each layout starts from the same state.
         cv2.setRNGSeed(0)
         tracker = create_tracker(name)
         tracker.init(start, roi)
         ok, state = tracker.update(later[kind])
         assert ok, kind
         centres[kind] = (state.ellipse.cx, state.ellipse.cy)
-    # Grey conversion of BGR and of BGRA is the same; the float path differs only by rounding. OpenCV's
-    # trackers report whole-pixel boxes, and MIL's grey-as-BGR frame moves its box by one.
-    tolerance = 1.0 if name.startswith("cv-") else 0.5
+    # A layout read wrongly (channels taken for columns, BGRA's alpha for blue, float as bytes) loses the texture
+    # or shifts it by far more than these bounds. OpenCV's trackers report whole-pixel boxes. MIL's box also moves
+    # by a pixel or two from call to call with the same seed and one thread (30 repeats: 32-34, 61-63), so it is held
+    # to the true shift only; ours track every layout alike to rounding (measured: 0.03 px at most).
+    truth = (33, 62)
+    tolerance = {"cv-mil": 2.0}.get(name, 1.0 if name.startswith("cv-") else 0.5)
     for kind, centre in centres.items():
-        assert centre == pytest.approx(centres["grey"], abs=tolerance), kind
-    if not name.startswith("cv-"):
-        assert centres["grey"] == pytest.approx((33, 62), abs=0.5)
+        assert centre == pytest.approx(truth, abs=tolerance), kind
+        if not name.startswith("cv-"):
+            assert centre == pytest.approx(centres["grey"], abs=0.2), kind
 
 
 @pytest.mark.parametrize("name", tracker_names())

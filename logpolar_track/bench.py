@@ -134,8 +134,9 @@ def start_roi(roi: Ellipse, start: int) -> Ellipse:
     return Ellipse(roi.cx + dx * width, roi.cy + dy * height, roi.a * scale, roi.b * scale, roi.angle_deg)
 
 
-def collect_sequences(datasets: Iterable) -> list[Sequence]:
-    """All sequences of the given dataset folders, in order.
+def collect_sequences(datasets: Iterable, unread: list[tuple[Path, str]] | None = None) -> list[Sequence]:
+    """All sequences of the given dataset folders, in order; ``unread`` gets ``(folder, what it lacks)`` for each
+    folder skipped that looked like a sequence (see :func:`~logpolar_track.datasets.discover`).
 
     Raises
     ------
@@ -143,10 +144,19 @@ def collect_sequences(datasets: Iterable) -> list[Sequence]:
         If a dataset holds no recognisable sequence, or two sequences share a name.
     """
     sequences: list[Sequence] = []
+    unread = [] if unread is None else unread
     for dataset in datasets:
-        found = discover(dataset)
+        before = len(unread)
+        found = discover(dataset, unread)
+        skipped = unread[before:]
+        if not found and skipped and skipped[0][0] == Path(dataset):
+            raise UsageError(f"no sequences found in '{dataset}': it has {skipped[0][1]}")
         if not found:
-            raise UsageError(f"no sequences found in '{dataset}' (searched {SEARCH_DEPTH} folders down); expected "
+            where = f"searched {SEARCH_DEPTH} folders down"
+            if skipped:
+                count = "a folder" if len(skipped) == 1 else f"{len(skipped)} folders, e.g."
+                where += f"; skipped {count} '{skipped[0][0]}', which has {skipped[0][1]}"
+            raise UsageError(f"no sequences found in '{dataset}' ({where}); expected "
                              "videos with .gt.csv sidecars, or OTB (img/ + groundtruth_rect.txt), VOT (groundtruth.txt "
                              "+ frames), UAV123 (img/ + <name>.txt) folders, or a folder of such folders")
         sequences.extend(found)

@@ -311,11 +311,13 @@ def sequences_in(folder: Path) -> list[Sequence]:
     return []
 
 
-def discover(path) -> list[Sequence]:
+def discover(path, unread: list[tuple[Path, str]] | None = None) -> list[Sequence]:
     """Every sequence in ``path``: a sequence folder, a folder of sequence folders, or a sample video.
 
     Sub-folders are searched (up to three levels) only where a folder holds no sequence itself. Results are
-    in natural order of their paths.
+    in natural order of their paths. A folder that holds frames or ground truth but is not a sequence lptrack
+    reads (OTB's ``img/`` without its ``groundtruth_rect.txt``, say) is skipped; ``unread``, if given, gets
+    ``(folder, what it lacks)`` for each.
 
     Raises
     ------
@@ -333,17 +335,41 @@ def discover(path) -> list[Sequence]:
         if path.suffix.lower() in VIDEO_EXTENSIONS:
             return [video_sequence(path)]
         raise UsageError(f"dataset '{path}' is a file; give a folder of sequences or a video with a .gt.csv")
-    return _discover(path, SEARCH_DEPTH)
+    return _discover(path, SEARCH_DEPTH, [] if unread is None else unread)
 
 
-def _discover(folder: Path, depth: int) -> list[Sequence]:
+def _discover(folder: Path, depth: int, unread: list[tuple[Path, str]]) -> list[Sequence]:
     found = sequences_in(folder)
-    if found or depth == 0:
+    if found:
+        return found
+    lacking = _what_it_lacks(folder)
+    if lacking is not None:
+        # Its sub-folders are its frames, not sequences of their own.
+        unread.append((folder, lacking))
+        return found
+    if depth == 0:
         return found
     for sub in sorted((p for p in folder.iterdir() if p.is_dir() and not p.name.startswith(".")),
                       key=_natural_key):
-        found.extend(_discover(sub, depth - 1))
+        found.extend(_discover(sub, depth - 1, unread))
     return found
+
+
+def _what_it_lacks(folder: Path) -> str | None:
+    """For a folder that is not a sequence (:func:`sequences_in` found none) but holds frames, a ground-truth file
+    or videos: what it lacks to be one. None for any other folder."""
+    frames = next((sub for sub in (folder / "img", folder / "imgs", folder / "color", folder) if _images_in(sub)),
+                  None)
+    truth = sorted(folder.glob("groundtruth*.txt"), key=_natural_key) + [p for p in (folder / f"{folder.name}.txt",)
+                                                                         if p.is_file()]
+    if frames is not None and not truth:
+        return (f"images in '{frames}' but no ground truth beside them (groundtruth_rect.txt for OTB, "
+                f"groundtruth.txt for VOT, {folder.name}.txt for UAV123)")
+    if truth and frames is None:
+        return f"{truth[0].name} but no images (in img/, imgs/, color/ or the folder itself)"
+    if frames is None and any(p.suffix.lower() in VIDEO_EXTENSIONS for p in folder.iterdir() if p.is_file()):
+        return "videos but no <name>.gt.csv ground truth beside them (as lptrack samples writes)"
+    return None
 
 
 def load_ground_truth(path) -> GroundTruth:

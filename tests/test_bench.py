@@ -449,6 +449,47 @@ def test_bench_notes_ground_truth_out_of_step_with_its_images(tmp_path):
                                        "track; give a smaller N"]
 
 
+def test_bench_says_which_folders_it_skipped_and_why(tmp_path):
+    """A folder that holds frames or ground truth but is not a sequence is skipped with a note saying what it lacks
+    (it was skipped without a word); where nothing else is found, the error says it."""
+    roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
+    poses = [Pose(60.0 + 2 * i, 70.0, 1.0, 0.0) for i in range(4)]
+    _otb_folder(tmp_path, "walk", poses, roi)
+    no_truth = _otb_folder(tmp_path, "run", poses, roi)
+    (no_truth / "groundtruth_rect.txt").rename(no_truth / "groundtruth_rect.bak")
+    no_images = tmp_path / "sit"
+    no_images.mkdir()
+    (no_images / "groundtruth.txt").write_text("1,2,3,4\n")
+    (tmp_path / "empty").mkdir()  # holds nothing: not a sequence, and nothing to say
+    res = _run("bench", "--dataset", tmp_path, "--trackers", "fixed")
+    assert res.exit_code == 0, res.stderr
+    notes = [line for line in res.stderr.splitlines() if line.startswith("lptrack: note:")]
+    assert notes == [
+        f"lptrack: note: skipped '{no_truth}', which has images in '{no_truth / 'img'}' but no ground truth beside "
+        f"them (groundtruth_rect.txt for OTB, groundtruth.txt for VOT, run.txt for UAV123)",
+        f"lptrack: note: skipped '{no_images}', which has groundtruth.txt but no images (in img/, imgs/, color/ or "
+        f"the folder itself)"]
+    assert [line.split()[0] for line in res.stdout.splitlines()[2:3]] == ["walk"]
+    assert "lptrack: note:" not in _run("bench", "--dataset", tmp_path, "--trackers", "fixed", "-q").stderr
+    res = _run("bench", "--dataset", no_truth, "--trackers", "fixed")
+    assert res.exit_code == 2 and res.stderr.splitlines() == [
+        f"lptrack: error: no sequences found in '{no_truth}': it has images in '{no_truth / 'img'}' but no ground "
+        f"truth beside them (groundtruth_rect.txt for OTB, groundtruth.txt for VOT, run.txt for UAV123)"]
+    # Beyond five, the rest are counted (a dataset laid out otherwise would name every folder).
+    for k in range(5):
+        (tmp_path / f"sit{k}").mkdir()
+        (tmp_path / f"sit{k}" / "groundtruth.txt").write_text("1,2,3,4\n")
+    notes = [line for line in _run("bench", "--dataset", tmp_path, "--trackers", "fixed").stderr.splitlines()
+             if line.startswith("lptrack: note:")]
+    assert len(notes) == 6 and notes[-1] == ("lptrack: note: skipped 2 more folders that hold frames, videos or "
+                                             "ground truth but are not sequences")
+    (tmp_path / "walk" / "groundtruth_rect.txt").unlink()
+    res = _run("bench", "--dataset", tmp_path, "--trackers", "fixed")
+    assert res.exit_code == 2 and res.stderr.startswith(
+        f"lptrack: error: no sequences found in '{tmp_path}' (searched 3 folders down; skipped 8 folders, e.g. "
+        f"'{no_truth}', which has images in")
+
+
 def test_dataset_errors_say_where(tmp_path, dataset):
     roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
     deep = tmp_path / "deep"

@@ -19,6 +19,10 @@ from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, check_jobs_or_scheduler,
                require_stdout, write_stdout)
 
 
+#: Skipped folders named one by one before the rest are counted (a dataset laid out otherwise, UAV123's images
+#: apart from its ground truth, would name each of its 123).
+_SKIPPED_NOTES = 5
+
 _BENCH_EPILOG = """\b
 Datasets (--dataset, repeatable; default: the project's sample_videos/):
   lptrack samples  <name>.mp4 + <name>.gt.csv (+ <name>.roi)
@@ -143,7 +147,8 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
         datasets = (found,)
     names, skipped = _runnable_trackers(trackers)
     tuning = parse_param_options(params, names, [name for name, _ in skipped])
-    sequences = collect_sequences(datasets)
+    unread: list[tuple[Path, str]] = []
+    sequences = collect_sequences(datasets, unread)
     if backwards:
         videos = [s.path.name for s in sequences if s.frame_files is None]
         if videos:
@@ -158,7 +163,11 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
                          f"a smaller N")
     _note_skipped(skipped, quiet)
     if not quiet:
-        for note in dict.fromkeys(note for s in sequences for note in s.notes):
+        skipped = [f"skipped '{folder}', which has {lacking}" for folder, lacking in unread[:_SKIPPED_NOTES]]
+        if len(unread) > _SKIPPED_NOTES:
+            skipped.append(f"skipped {len(unread) - _SKIPPED_NOTES} more folders that hold frames, videos or ground "
+                           f"truth but are not sequences")
+        for note in [*skipped, *dict.fromkeys(note for s in sequences for note in s.notes)]:
             click.echo(f"lptrack: note: {note}", err=True)
     threads = TRACKING_OPENCV_THREADS if threads is None else threads
 

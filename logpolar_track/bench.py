@@ -30,7 +30,7 @@ from .datasets import SEARCH_DEPTH, Sequence, discover
 from .errors import OutputError, UsageError
 from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
                        auc, score_track)
-from .executor import TRACKING_OPENCV_THREADS, opencv_threads, run_tasks
+from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_threads, run_tasks
 from .geometry import Ellipse
 from .look import PLOT_SUFFIXES, check_image_suffix
 from .trackers import create_tracker, tracker_class, tracker_names
@@ -230,7 +230,7 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # one failing pair must not sink the whole benchmark; it is reported
-        error = f"{type(exc).__name__}: {exc}"
+        error = describe_exception(exc)  # lptrack's own messages as they are, a bug's with its type
     table = np.array(rows, float).reshape(-1, 9)
     track = Track(table[:, 0].astype(int), table[:, 1:6], table[:, 6], table[:, 7], table[:, 8], statuses)
     result = {"sequence": sequence.name, "tracker": tracker_name, "start": start,

@@ -27,7 +27,7 @@ import numpy as np
 
 from . import __version__
 from .datasets import SEARCH_DEPTH, Sequence, discover
-from .errors import OutputError, UsageError
+from .errors import OutputError, RoiError, UsageError
 from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
                        auc, score_track)
 from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_threads, run_tasks
@@ -215,7 +215,10 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
                 if index < sequence.start:
                     continue
                 if index == sequence.start:
-                    state, status = tracker.init(frame, roi), "init"
+                    try:
+                        state, status = tracker.init(frame, roi), "init"
+                    except RoiError as exc:  # the ground truth's (or a .roi sidecar's) start: say which
+                        raise RoiError(f"start ROI {roi.to_spec()} on {sequence.frame_name(index)}: {exc}") from None
                 else:
                     t0 = time.perf_counter()
                     ok, state = tracker.update(frame)

@@ -119,6 +119,13 @@ class Sequence:
                 if offset >= 0 and offset % self.frame_step == 0:
                     yield offset // self.frame_step, time_s, frame
 
+    def frame_name(self, index: int) -> str:
+        """Where frame ``index`` comes from, for messages: its image's path, or ``frame N of VIDEO`` (N counted
+        from 0 in the video as decoded)."""
+        if self.frame_files is not None:
+            return f"'{self.frame_files[index]}'"
+        return f"frame {self.first_frame + index * self.frame_step} of '{self.path}'"
+
     def backwards(self) -> "Sequence":
         """This sequence played backwards, named ``<name>-backwards``: its frames from the last to the first, the
         ground truth reversed with them (:meth:`~logpolar_track.evaluate.GroundTruth.reversed`), started on the

@@ -428,6 +428,20 @@ def test_a_failed_run_is_marked_in_the_mean_it_enters(tmp_path):
     assert table[-1].split()[:5] == ["mean", "(1)", "fixed", "(1", "failed)"]
 
 
+def test_a_start_box_outside_its_frame_is_reported_with_where_it_starts(tmp_path):
+    """The tracker's error names the start ROI and its image, so that the ground-truth line is found (it gave the
+    ROI's centre alone)."""
+    roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
+    folder = _otb_folder(tmp_path, "walk", [Pose(60.0 + 2 * i, 70.0, 1.0, 0.0) for i in range(6)], roi)
+    lines = (folder / "groundtruth_rect.txt").read_text().splitlines()
+    (folder / "groundtruth_rect.txt").write_text("\n".join(["0,0,0,0", "301,41,20,20"] + lines[2:]) + "\n")
+    res = _run("bench", "--dataset", tmp_path, "--trackers", "fixed", "-q", "--every", "2")
+    assert res.exit_code == 1
+    assert res.stderr.splitlines() == [
+        f"lptrack: error: fixed failed on walk-every2: start ROI 310,50,10 on '{folder / 'img' / '0002.jpg'}': ROI "
+        f"centre (310, 50) lies outside the 200x140 frame; give a centre with 0 <= cx <= 199 and 0 <= cy <= 139"]
+
+
 def test_bench_notes_ground_truth_out_of_step_with_its_images(tmp_path):
     roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
     folder = _otb_folder(tmp_path, "walk", [Pose(60.0 + 2 * i, 70.0, 1.0, 0.0) for i in range(8)], roi)

@@ -18,15 +18,18 @@ ROI's own ellipse (its angle kept) moved by as much as the box's centre moved an
 ``scale = sqrt(w*h) / sqrt(w0*h0)`` against the initial box, so the first state is the ROI itself;
 ``rotation_deg = None``; and ``score`` 1.0 when OpenCV says ok, else 0.0 (OpenCV gives no confidence). MIL says
 ok even when the target is gone; KCF and CSRT can report a loss. ``init`` seeds OpenCV's random number
-generator (keyword ``seed``, default 0): MIL draws random samples, and its runs then repeat from process to process
-(the benchmark runs each in a fresh one), but not within one process: in OpenCV 5.1 a second MIL run there can end
-a pixel or a few away from the first (state OpenCV keeps beyond the seed). A ROI hanging over the frame's edge
+generator and the C library's ``rand()`` (keyword ``seed``, default 0): MIL draws its samples with the first and its
+features with the second, so its runs repeat, within a process as from process to process. (Seeded with OpenCV's
+alone, a MIL run depended on how many had run before it in the process, and ended up to 5 px away.) ``rand()`` is
+one per process: MIL runs in several threads of a process at once still vary. A ROI hanging over the frame's edge
 starts them on its box cut to the frame.
 """
 
 from __future__ import annotations
 
+import ctypes
 import math
+import sys
 
 import numpy as np
 
@@ -109,9 +112,9 @@ class _OpenCVTracker(Tracker):
                            "ROI or another tracker")
         import cv2
 
-        # A fixed seed of OpenCV's per-thread RNG, which MIL samples with: runs repeat from process to process (see
-        # the module's notes for within one).
+        # Fixed seeds of the random numbers MIL draws (see the module's notes), so that its runs repeat.
         cv2.setRNGSeed(self.seed)
+        _seed_c_rand(self.seed)
         self._tracker = self._create()
         try:
             self._tracker.init(_bgr(frame), box)
@@ -147,6 +150,16 @@ class _OpenCVTracker(Tracker):
         cx = self._roi.cx + (x + w / 2.0) - (x0 + w0 / 2.0)
         cy = self._roi.cy + (y + h / 2.0) - (y0 + h0 / 2.0)
         return TrackState(self._roi.moved(cx, cy, scale), scale, None, score)
+
+
+def _seed_c_rand(seed: int) -> None:
+    """Seed the C library's ``rand()``, which OpenCV's MIL draws its features with (``generateRandomFeature``);
+    nothing where the library cannot be reached."""
+    try:
+        library = ctypes.CDLL("ucrtbase") if sys.platform == "win32" else ctypes.CDLL(None)
+        library.srand(ctypes.c_uint(seed))
+    except (OSError, AttributeError):
+        pass
 
 
 def _bgr(frame: np.ndarray) -> np.ndarray:

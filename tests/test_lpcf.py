@@ -1542,8 +1542,9 @@ SAMPLE_NAMES = ("spin", "zoom", "ellipse", "occlusion", "lighting", "noise_blur"
 def test_default_tracker_meets_the_issue_bounds_on_every_sample_video(name):
     """The best-tracker issue's targets on each bundled sample: tracked to the end with success >= 98 % (centre
     error < 25 % of the radius), median centre error <= 1 px, scale error <= 1.5 %, rotation error <= 1 degree.
-    Tightest, measured: appearance 0.4 px, 0.2 %, 0.99 degrees; lighting 0.8 px, 1.2 %, 0.6 degrees (before the
-    gradient refinement both missed: 2.0 px, 3.3 % and 1.3 px)."""
+    Tightest, measured (2026-12-06): appearance 0.58 px, 0.28 %, 0.86 degrees; lighting 0.76 px, 1.31 %, 0.74
+    degrees, the same with OpenCV's and NumPy's AVX-512 and AVX2 paths turned off (before the gradient refinement
+    both missed: 2.0 px, 3.3 % and 1.3 px)."""
     from pathlib import Path
 
     from logpolar_track.bench import collect_sequences, run_bench
@@ -1703,3 +1704,24 @@ def test_a_roi_on_a_flat_area_is_lost_not_a_crash():
         results = [tracker.update(frame) for _ in range(40)]
     assert not any(ok for ok, _ in results)
     assert all(state.centre == (100.0, 240.0) and state.score == 0.0 for _, state in results)
+
+
+def test_the_running_level_starts_from_the_tracked_frames_matches():
+    """The level a drop is judged against is the mean of the matches tracked so far over the first frames, not
+    pulled up by the first frame's perfect match with itself (which left a deforming object dropped on its 4th
+    frame at a third of its frame rate, and never resumed)."""
+    roi = Ellipse.circle(160, 120, 40)
+    poses = [Pose(160 + 2 * k, 120, 1.0, 0.0) for k in range(8)]
+    rng = np.random.default_rng(7)
+    # Noise, so that matches are well below 1.
+    frames = [np.clip(f + rng.normal(0, 25, f.shape), 0, 255).astype(np.uint8)
+              for f in synthetic_sequence(poses, roi, size=(320, 240), seed=5)]
+    tracker = create_tracker("lpcf")
+    tracker.init(frames[0], roi)
+    matches = []
+    for frame in frames[1:]:
+        ok, _ = tracker.update(frame)
+        assert ok
+        matches.append(tracker.diagnostics["match"])
+    assert max(matches) < 0.9
+    assert tracker.match_level == pytest.approx(np.mean(matches), rel=1e-6)

@@ -485,6 +485,14 @@ def test_bench_says_which_folders_it_skipped_and_why(tmp_path):
         f"lptrack: note: skipped '{no_images}', which has groundtruth.txt but no images (in img/, imgs/, color/ or "
         f"the folder itself)"]
     assert "lptrack: note:" not in _run("bench", "--dataset", tmp_path, "--trackers", "fixed", "-q").stderr
+    # With the notes, --json is written as with -q (the notes' list once took the place of the skipped trackers').
+    docs = []
+    for quiet in ((), ("-q",)):
+        res = _run("bench", "--dataset", tmp_path, "--trackers", "fixed,cv-kcf", "--json", "-", *quiet)
+        assert res.exit_code == 0, res.stderr
+        docs.append(json.loads(res.stdout))
+    assert docs[0]["skipped_trackers"] == docs[1]["skipped_trackers"]
+    assert [r["sequence"] for r in docs[0]["results"]] == ["walk"]
     res = _run("bench", "--dataset", no_truth, "--trackers", "fixed")
     assert res.exit_code == 2 and res.stderr.splitlines() == [
         f"lptrack: error: no sequences found in '{no_truth}': it has images in '{no_truth / 'img'}' but no ground "

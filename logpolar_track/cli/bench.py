@@ -165,11 +165,11 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
                          f"a smaller N")
     _note_skipped(skipped, quiet)
     if not quiet:
-        skipped = [f"skipped '{folder}', which has {lacking}" for folder, lacking in unread[:_SKIPPED_NOTES]]
+        folder_notes = [f"skipped '{folder}', which has {lacking}" for folder, lacking in unread[:_SKIPPED_NOTES]]
         if len(unread) > _SKIPPED_NOTES:
-            skipped.append(f"skipped {len(unread) - _SKIPPED_NOTES} more folders that hold frames, videos or ground "
-                           f"truth but are not sequences")
-        for note in [*skipped, *dict.fromkeys(note for s in sequences for note in s.notes)]:
+            folder_notes.append(f"skipped {len(unread) - _SKIPPED_NOTES} more folders that hold frames, videos or "
+                                f"ground truth but are not sequences")
+        for note in [*folder_notes, *dict.fromkeys(note for s in sequences for note in s.notes)]:
             click.echo(f"lptrack: note: {note}", err=True)
     threads = TRACKING_OPENCV_THREADS if threads is None else threads
 

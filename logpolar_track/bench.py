@@ -149,7 +149,7 @@ def collect_sequences(datasets: Iterable, unread: list[tuple[Path, str]] | None 
         before = len(unread)
         found = discover(dataset, unread)
         skipped = unread[before:]
-        if not found and skipped and skipped[0][0] == Path(dataset):
+        if not found and len(skipped) == 1 and skipped[0][0] == Path(dataset):
             raise UsageError(f"no sequences found in '{dataset}': it has {skipped[0][1]}")
         if not found:
             where = f"searched {SEARCH_DEPTH} folders down"

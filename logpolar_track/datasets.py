@@ -283,6 +283,12 @@ def video_sequence(video: Path, gt_path: Path | None = None) -> Sequence:
     return Sequence(stem, "lptrack", video, gt_path, gt, roi, start, n, fps, None)
 
 
+#: Sub-folders that hold a sequence's frames (OTB's and UAV123's ``img/``; VOT's ``imgs/`` or ``color/``, or the
+#: folder itself): never searched for sequences of their own.
+_OTB_FRAME_FOLDER = "img"
+_VOT_FRAME_FOLDERS = ("imgs", "color")
+
+
 def sequences_in(folder: Path) -> list[Sequence]:
     """The sequences stored directly in ``folder`` (no recursion); empty if it is not a sequence folder."""
     folder = Path(folder)
@@ -296,7 +302,7 @@ def sequences_in(folder: Path) -> list[Sequence]:
     if found:
         return found
     # OTB: img/ + groundtruth_rect.txt (or one file per target).
-    img = _images_in(folder / "img")
+    img = _images_in(folder / _OTB_FRAME_FOLDER)
     otb = sorted(folder.glob("groundtruth_rect*.txt"), key=_natural_key)
     if img and otb:
         for gt_path in otb:
@@ -307,7 +313,7 @@ def sequences_in(folder: Path) -> list[Sequence]:
     # VOT: groundtruth.txt + frames in the folder, imgs/ or color/.
     vot = folder / "groundtruth.txt"
     if vot.is_file():
-        for sub in (folder, folder / "imgs", folder / "color"):
+        for sub in (folder, *(folder / name for name in _VOT_FRAME_FOLDERS)):
             files = _images_in(sub)
             if files:
                 return [_image_sequence(folder.name, "vot", folder, vot, files)]
@@ -349,34 +355,44 @@ def _discover(folder: Path, depth: int, unread: list[tuple[Path, str]]) -> list[
     found = sequences_in(folder)
     if found:
         return found
-    lacking = _what_it_lacks(folder)
-    if lacking is not None:
-        # Its sub-folders are its frames, not sequences of their own.
-        unread.append((folder, lacking))
-        return found
-    if depth == 0:
-        return found
-    for sub in sorted((p for p in folder.iterdir() if p.is_dir() and not p.name.startswith(".")),
-                      key=_natural_key):
-        found.extend(_discover(sub, depth - 1, unread))
+    if depth > 0:
+        frame_folders = {_OTB_FRAME_FOLDER, *_VOT_FRAME_FOLDERS}
+        for sub in sorted((p for p in folder.iterdir()
+                           if p.is_dir() and not p.name.startswith(".") and p.name not in frame_folders),
+                          key=_natural_key):
+            found.extend(_discover(sub, depth - 1, unread))
+    if not found:
+        # Said only where nothing was found below: a stray image or video beside sequence folders is no sequence.
+        lacking = _what_it_lacks(folder)
+        if lacking is not None:
+            unread.append((folder, lacking))
     return found
 
 
 def _what_it_lacks(folder: Path) -> str | None:
     """For a folder that is not a sequence (:func:`sequences_in` found none) but holds frames, a ground-truth file
-    or videos: what it lacks to be one. None for any other folder."""
-    frames = next((sub for sub in (folder / "img", folder / "imgs", folder / "color", folder) if _images_in(sub)),
-                  None)
-    truth = sorted(folder.glob("groundtruth*.txt"), key=_natural_key) + [p for p in (folder / f"{folder.name}.txt",)
-                                                                         if p.is_file()]
-    if frames is not None and not truth:
-        return (f"images in '{frames}' but no ground truth beside them (groundtruth_rect.txt for OTB, "
-                f"groundtruth.txt for VOT, {folder.name}.txt for UAV123)")
-    if truth and frames is None:
-        return f"{truth[0].name} but no images (in img/, imgs/, color/ or the folder itself)"
-    if frames is None and any(p.suffix.lower() in VIDEO_EXTENSIONS for p in folder.iterdir() if p.is_file()):
-        return "videos but no <name>.gt.csv ground truth beside them (as lptrack samples writes)"
-    return None
+    or videos: what it lacks to be one, as a phrase after "it has". None for any other folder, or one that cannot be
+    read."""
+    try:
+        otb_frames = _images_in(folder / _OTB_FRAME_FOLDER)
+        vot_frames = next((sub for sub in (folder, *(folder / n for n in _VOT_FRAME_FOLDERS)) if _images_in(sub)),
+                          None)
+        truth = sorted(folder.glob("groundtruth*.txt"), key=_natural_key) + [
+            p for p in (folder / f"{folder.name}.txt",) if p.is_file()]
+        videos = any(p.suffix.lower() in VIDEO_EXTENSIONS for p in folder.iterdir() if p.is_file())
+    except OSError:
+        return None
+    frames = folder / _OTB_FRAME_FOLDER if otb_frames else vot_frames
+    if frames is None:
+        if truth:
+            return f"{truth[0].name} but no images (in img/, imgs/, color/ or the folder itself)"
+        return "videos but no <name>.gt.csv ground truth beside them (as lptrack samples writes)" if videos else None
+    readers = (f"groundtruth_rect.txt (OTB) or {folder.name}.txt (UAV123)" if otb_frames
+               else "groundtruth.txt (VOT)")
+    if not truth:
+        return f"images in '{frames}' but no ground truth beside them; with images there lptrack reads {readers}"
+    return (f"{truth[0].name} and images in '{frames}', which lptrack does not read together; with images there it "
+            f"reads {readers}")
 
 
 def load_ground_truth(path) -> GroundTruth:

@@ -479,11 +479,17 @@ def test_bench_says_which_folders_it_skipped_and_why(tmp_path):
     no_images.mkdir()
     (no_images / "groundtruth.txt").write_text("1,2,3,4\n")
     (tmp_path / "empty").mkdir()  # holds nothing: not a sequence, and nothing to say
+    # Ground truth and images that lptrack does not read together (LaSOT's img/ + groundtruth.txt).
+    mixed = _otb_folder(tmp_path, "stand", poses, roi)
+    (mixed / "groundtruth_rect.txt").rename(mixed / "groundtruth.txt")
+    cv2.imwrite(str(tmp_path / "cover.jpg"), np.zeros((8, 8, 3), np.uint8))  # a stray image beside the sequences
     assert _bench_notes(tmp_path) == [
         f"lptrack: note: skipped '{no_truth}', which has images in '{no_truth / 'img'}' but no ground truth beside "
-        f"them (groundtruth_rect.txt for OTB, groundtruth.txt for VOT, run.txt for UAV123)",
+        f"them; with images there lptrack reads groundtruth_rect.txt (OTB) or run.txt (UAV123)",
         f"lptrack: note: skipped '{no_images}', which has groundtruth.txt but no images (in img/, imgs/, color/ or "
-        f"the folder itself)"]
+        f"the folder itself)",
+        f"lptrack: note: skipped '{mixed}', which has groundtruth.txt and images in '{mixed / 'img'}', which lptrack "
+        f"does not read together; with images there it reads groundtruth_rect.txt (OTB) or stand.txt (UAV123)"]
     assert "lptrack: note:" not in _run("bench", "--dataset", tmp_path, "--trackers", "fixed", "-q").stderr
     # With the notes, --json is written as with -q (the notes' list once took the place of the skipped trackers').
     docs = []
@@ -496,9 +502,9 @@ def test_bench_says_which_folders_it_skipped_and_why(tmp_path):
     res = _run("bench", "--dataset", no_truth, "--trackers", "fixed")
     assert res.exit_code == 2 and res.stderr.splitlines() == [
         f"lptrack: error: no sequences found in '{no_truth}': it has images in '{no_truth / 'img'}' but no ground "
-        f"truth beside them (groundtruth_rect.txt for OTB, groundtruth.txt for VOT, run.txt for UAV123)"]
+        f"truth beside them; with images there lptrack reads groundtruth_rect.txt (OTB) or run.txt (UAV123)"]
     # Beyond five, the rest are counted (a dataset laid out otherwise would name every folder).
-    for k in range(5):
+    for k in range(4):
         (tmp_path / f"sit{k}").mkdir()
         (tmp_path / f"sit{k}" / "groundtruth.txt").write_text("1,2,3,4\n")
     notes = _bench_notes(tmp_path)
@@ -507,7 +513,7 @@ def test_bench_says_which_folders_it_skipped_and_why(tmp_path):
     (tmp_path / "walk" / "groundtruth_rect.txt").unlink()
     res = _run("bench", "--dataset", tmp_path, "--trackers", "fixed")
     assert res.exit_code == 2 and res.stderr.startswith(
-        f"lptrack: error: no sequences found in '{tmp_path}' (searched 3 folders down; skipped 8 folders, e.g. "
+        f"lptrack: error: no sequences found in '{tmp_path}' (searched 3 folders down; skipped 9 folders, e.g. "
         f"'{no_truth}', which has images in")
 
 

@@ -218,7 +218,7 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
                     try:
                         state, status = tracker.init(frame, roi), "init"
                     except RoiError as exc:  # the ground truth's (or a .roi sidecar's) start: say which
-                        raise RoiError(f"start ROI {roi.to_spec()} on {sequence.frame_name(index)}: {exc}") from None
+                        raise RoiError(f"initial ROI {roi.to_spec()} on {sequence.frame_name(index)}: {exc}") from None
                 else:
                     t0 = time.perf_counter()
                     ok, state = tracker.update(frame)

@@ -438,7 +438,7 @@ def test_a_start_box_outside_its_frame_is_reported_with_where_it_starts(tmp_path
     res = _run("bench", "--dataset", tmp_path, "--trackers", "fixed", "-q", "--every", "2")
     assert res.exit_code == 1
     assert res.stderr.splitlines() == [
-        f"lptrack: error: fixed failed on walk-every2: start ROI 310,50,10 on '{folder / 'img' / '0002.jpg'}': ROI "
+        f"lptrack: error: fixed failed on walk-every2: initial ROI 310,50,10 on '{folder / 'img' / '0002.jpg'}': ROI "
         f"centre (310, 50) lies outside the 200x140 frame; give a centre with 0 <= cx <= 199 and 0 <= cy <= 139"]
 
 

@@ -37,7 +37,8 @@ Datasets (--dataset, repeatable; default: the project's sample_videos/):
 \b
 Columns (per sequence and tracker; 'mean' rows average over sequences):
   frames       frames scored: those with ground truth, from the start frame
-               on ('mean' rows: their sum)
+               on (a failed run: those it reached; --starts: the first
+               start's; 'mean' rows: their sum)
   success%     frames with centre error < 25% of the object's radius
                (radius = sqrt(w*h)/2 of the ground-truth box)
   AUC          area under the OTB success curve (IoU > t, 21 thresholds)

@@ -185,8 +185,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         the estimates agree.
     level_rate : float
         Running-average weight of a frame's match in the level that ``drop_ratio`` compares with. Until ``1 /
-        level_rate`` frames have been tracked the level is the plain mean of their matches (see
-        ``_LEVEL_FROM_TRACKED``).
+        level_rate`` frames have been tracked, the n-th moves it by ``1 / n`` instead: the plain mean of their
+        matches where no drop came between (see ``_LEVEL_FROM_TRACKED``).
     redetect_after : int
         Dropped frames in a row after which the object is searched for away from the estimate: every third frame the
         filter, at the last good frame's scale and angle, is correlated with the frame (or, in a large frame, the
@@ -2144,8 +2144,9 @@ _TURN_SMOOTHING_BINS = 2.0
 
 #: The running level of the match (``match_level``, which a drop is judged against) starts from the tracked frames'
 #: matches, not from the first frame's, which matches itself perfectly: until ``1 / level_rate`` frames are tracked it
-#: is their plain mean, then a running mean at ``level_rate``. Begun at 1.0 it spent its first ten to twenty frames
-#: far above what a deforming object matches at, so the first weak frames counted as drops and a match had to
+#: is their plain mean (frames in a drop pull it too, at ``_DROP_LEVEL_RATE``; a first update under ``drop_ratio``
+#: is still judged against 1.0), then a running mean at ``level_rate``. Begun at 1.0 it spent its first ten to twenty
+#: frames far above what a deforming object matches at, so the first weak frames counted as drops and a match had to
 #: climb to 0.4 of that inflated level to resume. Bag at a third of its frame rate (it changes shape within three
 #: frames), from the box: dropped on its 4th frame (match 0.21 against a level of 0.82) and never resumed, 2 of 66
 #: frames tracked; now 20 (IoU AUC 0.103 -> 0.337). Human3's walker there was dropped on its 4th frame too. Mean

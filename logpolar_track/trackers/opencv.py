@@ -20,9 +20,10 @@ ROI's own ellipse (its angle kept) moved by as much as the box's centre moved an
 ok even when the target is gone; KCF and CSRT can report a loss. ``init`` seeds OpenCV's random number
 generator and the C library's ``rand()`` (keyword ``seed``, default 0): MIL draws its samples with the first and its
 features with the second, so its runs repeat, within a process as from process to process. (Seeded with OpenCV's
-alone, a MIL run depended on how many had run before it in the process, and ended up to 5 px away.) ``rand()`` is
-one per process: MIL runs in several threads of a process at once still vary. A ROI hanging over the frame's edge
-starts them on its box cut to the frame.
+alone, a MIL run depended on how many had run before it in the process, and ended up to 5 px away.) On Linux and
+macOS ``rand()`` is one per process, so MIL runs in several threads of a process at once still vary; on Windows
+(the UCRT keeps it per thread) the seeding is not verified. A ROI hanging over the frame's edge starts them on its
+box cut to the frame.
 """
 
 from __future__ import annotations

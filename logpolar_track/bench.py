@@ -26,7 +26,7 @@ from typing import Callable, Iterable, Mapping
 import numpy as np
 
 from . import __version__
-from .datasets import SEARCH_DEPTH, Sequence, discover
+from .datasets import SEARCH_DEPTH, Sequence, discover, discover_one
 from .errors import OutputError, RoiError, UsageError
 from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
                        auc, score_track)
@@ -198,10 +198,7 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
         every key of :func:`~logpolar_track.evaluate.score_track`.
     """
     if not isinstance(sequence, Sequence):
-        found = discover(sequence)
-        if len(found) != 1:
-            raise UsageError(f"'{sequence}' holds {len(found)} sequences; run_one takes one")
-        sequence = found[0]
+        sequence = discover_one(sequence, "run_one takes one")
     params = dict(params or {})
     tracker_params = dict((params.get("tracker_params") or {}).get(tracker_name, {}))
     rows: list[tuple] = []

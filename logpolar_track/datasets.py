@@ -414,12 +414,26 @@ def load_ground_truth(path) -> GroundTruth:
         from .evaluate import read_ground_truth
 
         return read_ground_truth(path)
-    seqs = discover(path)
-    if len(seqs) != 1:
-        raise UsageError(f"'{path}' holds {len(seqs)} sequences; give one sequence folder or ground-truth file "
-                         "(.gt.csv, groundtruth_rect.txt, groundtruth.txt, <name>.txt)")
-    return seqs[0].gt
+    return discover_one(path, "give one sequence folder or ground-truth file (.gt.csv, groundtruth_rect.txt, "
+                              "groundtruth.txt, <name>.txt)").gt
 
 
-__all__ = ["Sequence", "discover", "sequences_in", "video_sequence", "load_ground_truth", "GroundTruthError",
-           "IMAGE_FPS"]
+def discover_one(path, expected: str) -> Sequence:
+    """The one sequence in ``path`` (:func:`discover`).
+
+    Raises
+    ------
+    UsageError
+        If ``path`` holds none or several: how many, what a folder that looks like a sequence lacks, then
+        ``expected``.
+    """
+    unread: list[tuple[Path, str]] = []
+    found = discover(path, unread)
+    if len(found) == 1:
+        return found[0]
+    why = next((f": it has {lacking}" for folder, lacking in unread if folder == Path(path)), "")
+    raise UsageError(f"'{path}' holds {len(found)} sequences{why}; {expected}")
+
+
+__all__ = ["Sequence", "discover", "discover_one", "sequences_in", "video_sequence", "load_ground_truth",
+           "GroundTruthError", "IMAGE_FPS"]

@@ -11,6 +11,7 @@ import cv2
 import numpy as np
 import pytest
 
+from logpolar_track.bench import run_one
 from logpolar_track.datasets import discover, load_ground_truth
 from logpolar_track.errors import InputError, UsageError
 from logpolar_track.evaluate import rotated_box_corners
@@ -233,3 +234,17 @@ def test_shared_sequences_played_backwards():
     forwards = seqs["bag"].gt
     assert bag.gt.rotation_deg[0] == 0.0 and bag.gt.rotation_deg[-1] == pytest.approx(-forwards.rotation_deg[-1])
     assert bag.gt.scale[-1] == pytest.approx(1 / forwards.scale[-1])
+
+
+def test_one_sequence_asked_for_where_there_is_none_says_why(tmp_path):
+    """load_ground_truth and run_one on a folder that looks like a sequence but is not one say what it lacks (they
+    said only that it holds 0 sequences)."""
+    folder = _images(tmp_path / "walk" / "img", 3).parent
+    for call, expected in ((load_ground_truth, "give one sequence folder or ground-truth file"),
+                           (lambda path: run_one(path, "fixed"), "run_one takes one")):
+        with pytest.raises(UsageError) as caught:
+            call(folder)
+        assert str(caught.value) == (
+            f"'{folder}' holds 0 sequences: it has images in '{folder / 'img'}' but no ground truth beside them; with "
+            f"images there lptrack reads groundtruth_rect.txt (OTB) or walk.txt (UAV123); {expected}"
+            + (" (.gt.csv, groundtruth_rect.txt, groundtruth.txt, <name>.txt)" if call is load_ground_truth else ""))

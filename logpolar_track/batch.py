@@ -166,14 +166,10 @@ def mirrored_output_base(video, folder_videos: dict[Path, dict[str, set[str]]] |
     mirrored = mirrored_path(video)
     stem = video_stem(video)
     if not is_image_sequence(video):
-        folder = video.parent
-        if folder_videos is None or folder not in folder_videos:
-            by_stem = _videos_by_stem(folder)
-            if folder_videos is not None:
-                folder_videos[folder] = by_stem
-        else:
-            by_stem = folder_videos[folder]
-        if by_stem.get(stem, set()) - {video.name}:
+        read = {} if folder_videos is None else folder_videos
+        if video.parent not in read:
+            read[video.parent] = _videos_by_stem(video.parent)
+        if read[video.parent].get(stem, set()) - {video.name}:
             return mirrored
     return mirrored.with_name(stem)
 

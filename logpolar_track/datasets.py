@@ -162,15 +162,14 @@ class Sequence:
             raise UsageError(f"every takes a whole number of frames >= 1, got {n}")
         if n == 1:
             return self
-        gt = self.gt.every(self.start, n)
-        first = self.first_frame + self.start * self.frame_step
-        if self.frame_files is not None:
-            files = self.frame_files[self.start::n]
-            return replace(self, name=f"{self.name}-every{n}", gt=gt, start=0, n_frames=len(files), fps=self.fps / n,
-                           frame_files=files, frame_step=self.frame_step * n, first_frame=first)
-        n_frames = -(-(self.n_frames - self.start) // n) if self.n_frames > self.start else 0
-        return replace(self, name=f"{self.name}-every{n}", gt=gt, start=0, n_frames=n_frames, fps=self.fps / n,
-                       frame_step=self.frame_step * n, first_frame=first)
+        files = None if self.frame_files is None else self.frame_files[self.start::n]
+        if files is not None:
+            n_frames = len(files)
+        else:  # a video's count is its container's, 0 when unknown
+            n_frames = -(-(self.n_frames - self.start) // n) if self.n_frames > self.start else 0
+        return replace(self, name=f"{self.name}-every{n}", gt=self.gt.every(self.start, n), start=0, n_frames=n_frames,
+                       fps=self.fps / n, frame_files=files, frame_step=self.frame_step * n,
+                       first_frame=self.first_frame + self.start * self.frame_step)
 
     def describe(self) -> dict:
         """Plain-data summary for reports (JSON)."""
@@ -287,6 +286,7 @@ def video_sequence(video: Path, gt_path: Path | None = None) -> Sequence:
 #: folder itself): never searched for sequences of their own.
 _OTB_FRAME_FOLDER = "img"
 _VOT_FRAME_FOLDERS = ("imgs", "color")
+_FRAME_FOLDERS = frozenset((_OTB_FRAME_FOLDER, *_VOT_FRAME_FOLDERS))
 
 
 def sequences_in(folder: Path) -> list[Sequence]:
@@ -356,9 +356,8 @@ def _discover(folder: Path, depth: int, unread: list[tuple[Path, str]]) -> list[
     if found:
         return found
     if depth > 0:
-        frame_folders = {_OTB_FRAME_FOLDER, *_VOT_FRAME_FOLDERS}
         for sub in sorted((p for p in folder.iterdir()
-                           if p.is_dir() and not p.name.startswith(".") and p.name not in frame_folders),
+                           if p.is_dir() and not p.name.startswith(".") and p.name not in _FRAME_FOLDERS),
                           key=_natural_key):
             found.extend(_discover(sub, depth - 1, unread))
     if not found:

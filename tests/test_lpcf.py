@@ -891,6 +891,32 @@ def test_an_object_that_faded_out_is_searched_for_and_found_elsewhere(seed):
     assert all(statuses[k - 1] for k in range(found[0], len(frames)))
 
 
+@pytest.mark.parametrize("seed", [0, 3, 5, 7, 8])
+def test_an_object_back_at_its_first_angle_is_found_whatever_angle_the_estimate_wandered_to(seed):
+    """A disc (radius 40 px, 640x480) turns 50 degrees while it fades into the background over 25 frames (the
+    estimate follows part of the turn, to 26-38 degrees), is away for 20 frames and comes back 250 px to the right
+    at its first frame's angle, as a face turning away and back does. The long-term filter, the first frame's,
+    searched at the estimate's angle only and did not find it (seeds 0, 3, 5, 7 and 8 of 0-11; found in 5 of the
+    12); it also searches at the first frame's angle now, and finds it within 5 frames in these (10 of the 12), at
+    its own angle, and nothing is reported tracked while it is away."""
+    rng = np.random.default_rng(seed)
+    background, texture = random_texture(480, 640, rng), random_texture(99, 99, rng)
+    roi = Ellipse.circle(200, 240, 40)
+    frames = [render_frame(background, texture, roi, Pose(200, 240, 1.0, 0.0))] * 20
+    for k in range(1, 26):
+        turned = render_frame(background, texture, roi, Pose(200, 240, 1.0, 50.0 * k / 25))
+        frames.append(cv2.addWeighted(turned, 1 - k / 25, background, k / 25, 0))
+    frames += [background] * 20 + [render_frame(background, texture, roi, Pose(450, 240, 1.0, 0.0))] * 60
+    _, results = run(frames, roi)
+    statuses = [ok for ok, _ in results]  # results[k - 1] is frame k
+    assert not any(statuses[44:64])  # frames 45-64: faded out, away
+    found = [k for k in range(65, len(frames)) if statuses[k - 1]
+             and math.hypot(results[k - 1][1].centre[0] - 450, results[k - 1][1].centre[1] - 240) < 5]
+    assert found and found[0] - 65 <= 15
+    assert all(statuses[k - 1] for k in range(found[0], len(frames)))
+    assert abs(results[-1][1].rotation_deg) < 2.0
+
+
 def test_a_frame_the_long_term_model_does_not_recognise_is_not_learnt():
     """Where the first frame's filter answers the estimate below ``_LONG_TERM_WEAK``, the frame is not learnt, even
     where the short-term filter answers sharply enough to learn (what it would learn there may be a look-alike):

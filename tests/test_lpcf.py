@@ -867,6 +867,34 @@ def test_the_long_term_model_finds_an_object_whose_match_faded_slowly(seed):
     assert np.median(centre_errors([results[k - 1] for k in back], [poses[k] for k in back])) <= 1.0
 
 
+def _faded_out_and_back(seed, turn_deg=0.0):
+    """A disc (radius 40 px, 640x480) still at (200, 240) for 20 frames, fading into the background over 25 while it
+    turns ``turn_deg`` degrees, away for 20, then back for 60 frames 250 px to the right, at its first frame's angle:
+    the ROI and the frames."""
+    rng = np.random.default_rng(seed)
+    background, texture = random_texture(480, 640, rng), random_texture(99, 99, rng)
+    roi = Ellipse.circle(200, 240, 40)
+    frames = [render_frame(background, texture, roi, Pose(200, 240, 1.0, 0.0))] * 20
+    for k in range(1, 26):
+        turned = render_frame(background, texture, roi, Pose(200, 240, 1.0, turn_deg * k / 25))
+        frames.append(cv2.addWeighted(turned, 1 - k / 25, background, k / 25, 0))
+    frames += [background] * 20 + [render_frame(background, texture, roi, Pose(450, 240, 1.0, 0.0))] * 60
+    return roi, frames
+
+
+def _found_back(results, within_px):
+    """The first frame (65 or later) at which the disc of :func:`_faded_out_and_back` is reported tracked within
+    ``within_px`` of its place, checking that nothing is reported tracked while it is away (frames 45-64) and every
+    frame is from then on; None if it is not found."""
+    statuses = [ok for ok, _ in results]  # results[k - 1] is frame k
+    assert not any(statuses[44:64])
+    found = [k for k in range(65, len(results) + 1) if statuses[k - 1]
+             and math.hypot(results[k - 1][1].centre[0] - 450, results[k - 1][1].centre[1] - 240) < within_px]
+    if found:
+        assert all(statuses[found[0] - 1:])
+    return found[0] if found else None
+
+
 @pytest.mark.parametrize("seed", [1, 7])
 def test_an_object_that_faded_out_is_searched_for_and_found_elsewhere(seed):
     """A disc (radius 40 px, 640x480, still) fades into the background over 25 frames, is away for 20 and is then
@@ -875,45 +903,23 @@ def test_an_object_that_faded_out_is_searched_for_and_found_elsewhere(seed):
     nothing searched: the disc was reported lost to the end. Reported lost for ``_LONG_TERM_LOST_RUN`` frames, the
     estimate is searched for with the long-term model, and the disc is found (measured: 9 and 7 frames after it is
     back) and never reported tracked while it is away."""
-    rng = np.random.default_rng(seed)
-    background, texture = random_texture(480, 640, rng), random_texture(99, 99, rng)
-    roi = Ellipse.circle(200, 240, 40)
-    there = render_frame(background, texture, roi, Pose(200, 240, 1.0, 0.0))
-    elsewhere = render_frame(background, texture, roi, Pose(450, 240, 1.0, 0.0))
-    fading = [cv2.addWeighted(there, 1 - k / 25, background, k / 25, 0) for k in range(1, 26)]
-    frames = [there] * 20 + fading + [background] * 20 + [elsewhere] * 60
+    roi, frames = _faded_out_and_back(seed)
     _, results = run(frames, roi)
-    statuses = [ok for ok, _ in results]  # results[k - 1] is frame k
-    assert not any(statuses[44:64])  # frames 45-64: faded out, away
-    found = [k for k in range(65, len(frames)) if statuses[k - 1]
-             and math.hypot(results[k - 1][1].centre[0] - 450, results[k - 1][1].centre[1] - 240) < 10]
-    assert found and found[0] - 65 <= 40
-    assert all(statuses[k - 1] for k in range(found[0], len(frames)))
+    found = _found_back(results, 10)
+    assert found is not None and found - 65 <= 40
 
 
 @pytest.mark.parametrize("seed", [0, 3, 5, 7, 8])
 def test_an_object_back_at_its_first_angle_is_found_whatever_angle_the_estimate_wandered_to(seed):
-    """A disc (radius 40 px, 640x480) turns 50 degrees while it fades into the background over 25 frames (the
-    estimate follows part of the turn, to 26-38 degrees), is away for 20 frames and comes back 250 px to the right
-    at its first frame's angle, as a face turning away and back does. The long-term filter, the first frame's,
-    searched at the estimate's angle only and did not find it (seeds 0, 3, 5, 7 and 8 of 0-11; found in 5 of the
-    12); it also searches at the first frame's angle now, and finds it within 5 frames in these (10 of the 12), at
-    its own angle, and nothing is reported tracked while it is away."""
-    rng = np.random.default_rng(seed)
-    background, texture = random_texture(480, 640, rng), random_texture(99, 99, rng)
-    roi = Ellipse.circle(200, 240, 40)
-    frames = [render_frame(background, texture, roi, Pose(200, 240, 1.0, 0.0))] * 20
-    for k in range(1, 26):
-        turned = render_frame(background, texture, roi, Pose(200, 240, 1.0, 50.0 * k / 25))
-        frames.append(cv2.addWeighted(turned, 1 - k / 25, background, k / 25, 0))
-    frames += [background] * 20 + [render_frame(background, texture, roi, Pose(450, 240, 1.0, 0.0))] * 60
+    """As above, but the disc turns 50 degrees while it fades out (the estimate follows part of the turn, to 26-38
+    degrees) and comes back at its first frame's angle, as a face turning away and back does. The long-term filter,
+    the first frame's, searched at the estimate's angle only and did not find it (seeds 0, 3, 5, 7 and 8 of 0-11;
+    found in 5 of the 12); it also searches at the first frame's angle now, and finds it within 5 frames in these
+    (10 of the 12), at its own angle, and nothing is reported tracked while it is away."""
+    roi, frames = _faded_out_and_back(seed, turn_deg=50.0)
     _, results = run(frames, roi)
-    statuses = [ok for ok, _ in results]  # results[k - 1] is frame k
-    assert not any(statuses[44:64])  # frames 45-64: faded out, away
-    found = [k for k in range(65, len(frames)) if statuses[k - 1]
-             and math.hypot(results[k - 1][1].centre[0] - 450, results[k - 1][1].centre[1] - 240) < 5]
-    assert found and found[0] - 65 <= 15
-    assert all(statuses[k - 1] for k in range(found[0], len(frames)))
+    found = _found_back(results, 5)
+    assert found is not None and found - 65 <= 15
     assert abs(results[-1][1].rotation_deg) < 2.0
 
 

@@ -34,7 +34,7 @@ from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_thread
 from .geometry import Ellipse
 from .look import PLOT_SUFFIXES, check_image_suffix
 from .trackers import create_tracker, tracker_class, tracker_names
-from .video import writes_in_place
+from .video import move_into_place, writes_in_place
 from .trackers import opencv as _opencv_peers  # noqa: F401  (registers cv-mil, cv-kcf, cv-csrt)
 
 #: Version of the JSON document written by :func:`bench_document`; bump on incompatible changes.
@@ -617,13 +617,14 @@ def bench_document(results: list[dict], summary: list[dict], sequences: list[Seq
     })
 
 
-def write_text_atomic(path, text: str) -> None:
-    """Write ``text`` to ``path`` via a temporary file in the same folder, renamed when complete.
+def write_text_atomic(path, text: str, *, overwrite: bool = True) -> None:
+    """Write ``text`` to ``path`` via a temporary file in the same folder, renamed when complete (over an existing
+    file only with ``overwrite``: see :func:`~logpolar_track.video.move_into_place`).
 
     Raises
     ------
     OutputError
-        If the folder does not exist or is not writable.
+        If the folder does not exist or is not writable, or ``path`` exists and ``overwrite`` is False.
     """
     path = Path(path)
     if writes_in_place(path):  # /dev/stdout, a pipe: no temporary file to rename over it
@@ -638,7 +639,10 @@ def write_text_atomic(path, text: str) -> None:
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
         tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
+        move_into_place(tmp, path, overwrite=overwrite, what="JSON output")
+    except OutputError:
+        tmp.unlink(missing_ok=True)
+        raise
     except OSError as exc:
         tmp.unlink(missing_ok=True)
         raise OutputError(f"cannot write '{path}': {exc.strerror or exc}") from None
@@ -653,9 +657,10 @@ def matplotlib_missing() -> str | None:
     return None
 
 
-def plot_curves(summary: list[dict], path, caption: str | None = None) -> None:
+def plot_curves(summary: list[dict], path, caption: str | None = None, *, overwrite: bool = True) -> None:
     """Save OTB-style success (IoU) and precision (centre error) plots, one curve per tracker, as a PNG (or PDF
-    or SVG, as ``path`` ends), under ``caption`` if given (what was run, e.g. "7 sequences played backwards").
+    or SVG, as ``path`` ends), under ``caption`` if given (what was run, e.g. "7 sequences played backwards"),
+    over an existing file only with ``overwrite``.
 
     The legend gives each tracker's success AUC and precision at 20 px (means over sequences).
 
@@ -701,7 +706,10 @@ def plot_curves(summary: list[dict], path, caption: str | None = None) -> None:
     tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
     try:
         fig.savefig(tmp, dpi=100)
-        os.replace(tmp, path)
+        move_into_place(tmp, path, overwrite=overwrite, what="plot")
+    except OutputError:
+        tmp.unlink(missing_ok=True)
+        raise
     except OSError as exc:
         tmp.unlink(missing_ok=True)
         raise OutputError(f"cannot write '{path}': {exc.strerror or exc}") from None

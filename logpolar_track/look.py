@@ -43,8 +43,8 @@ from .evaluate import (GroundTruthError, Track, read_data_file, rotation_errors,
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
 from .results import COLUMNS, FrameResult, off_contract
 from .trackers.base import TrackState
-from .video import (VideoReader, check_output_path, guess_image_sequence, opencv_path, temporary_path,
-                    video_stem)
+from .video import (VideoReader, check_output_path, guess_image_sequence, move_into_place, opencv_path,
+                    temporary_path, video_stem)
 
 #: BGR colour of the grid lines drawn by :func:`draw_grid` (cyan: rare in natural images, legible on both
 #: dark and light backgrounds).
@@ -303,7 +303,7 @@ def write_png(path, image: np.ndarray, *, overwrite: bool = False, what: str = "
     try:
         if not cv2.imwrite(str(temp), image):
             raise OutputError(f"cannot write {what} '{path}': PNG encoding failed")
-        os.replace(temp, path)
+        move_into_place(temp, path, overwrite=overwrite, what=what)
     except OSError as exc:
         raise OutputError(f"cannot write {what} '{path}': {exc.strerror or exc}") from None
     finally:
@@ -896,7 +896,7 @@ def plot_track(run, out_png, *, video=None, ground_truth=None, overwrite: bool =
             warnings.filterwarnings("ignore", message="Glyph .* missing from", category=UserWarning)
             fig.tight_layout()
             fig.savefig(temp, dpi=PLOT_DPI)
-        os.replace(temp, out_png)
+        move_into_place(temp, out_png, overwrite=overwrite, what="output image")
     except OSError as exc:
         raise OutputError(f"cannot write '{out_png}': {exc.strerror or exc}") from None
     finally:

@@ -33,7 +33,6 @@ import errno
 import io
 import json
 import math
-import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,7 +41,7 @@ from typing import IO
 from .errors import OutputError
 from .geometry import wrap_degrees
 from .trackers.base import TrackState
-from .video import check_output_path, writes_in_place, temporary_path
+from .video import check_output_path, move_into_place, writes_in_place, temporary_path
 
 #: The run CSV's columns, in order. A contract: never reorder or rename; only append.
 COLUMNS: tuple[str, ...] = ("frame", "time_s", "cx", "cy", "a", "b", "angle_deg", "scale", "rotation_deg",
@@ -271,6 +270,7 @@ class CsvWriter:
         self.video = video
         self._prefix = "" if video is None else _csv_field(video) + ","
         self.to_stdout = str(target) == "-"
+        self.overwrite = overwrite
         self.path: Path | None = None
         self._temp: Path | None = None
         self._initial_angle: float | None = None
@@ -351,7 +351,10 @@ class CsvWriter:
         try:
             self._file.close()
             if self._temp is not None:
-                os.replace(self._temp, self.path)
+                move_into_place(self._temp, self.path, overwrite=self.overwrite, what="output CSV")
+        except OutputError:  # the name was taken meanwhile
+            self._temp.unlink(missing_ok=True)
+            raise
         except OSError as exc:
             if self._temp is not None:
                 self._temp.unlink(missing_ok=True)

@@ -19,6 +19,7 @@ lowest; it has no frame rate of its own (``fps_guessed``).
 from __future__ import annotations
 
 import contextlib
+import errno
 import math
 import os
 
@@ -168,6 +169,10 @@ def _check_input_path(path: Path) -> None:
         raise VideoError(f"'{path}' is a folder, not a video file")
     if not os.access(path, os.R_OK):
         raise VideoError(f"video '{path}' is not readable (permission denied)")
+    if not path.is_file():
+        # OpenCV reads a video by seeking in it, which a pipe, a FIFO or a device (/dev/stdin) cannot do.
+        raise VideoError(f"'{path}' is a pipe or device, not a video file; OpenCV reads videos from files only: "
+                         f"save the stream to a file first")
     if path.stat().st_size == 0:
         raise VideoError(f"video '{path}' is empty (0 bytes); it contains no frames")
 
@@ -267,6 +272,8 @@ def announced_frame_count(path) -> int:
 #: Frame rates (frames per second) lptrack takes: 1e-300 gave time_s of 300 digits, and an encoder that refused it
 #: was reported as "no codec could be opened".
 FPS_RANGE = (0.001, 1e6)
+#: The lowest frame rate (frames per second) OpenCV's video writers take: mp4v and MJPG refuse 0.001.
+MIN_VIDEO_FPS = 0.002
 
 
 def check_fps(fps: float | None) -> None:
@@ -598,6 +605,8 @@ def check_output_path(path, *, overwrite: bool = False, what: str = "output", sp
         If its folder does not exist, is not a folder or is not writable, if ``path`` is a folder, if ``path``
         exists and ``overwrite`` is False, or if it is written in place and ``special_ok`` is False.
     """
+    if str(path).endswith(("/", os.sep)):  # Path() drops the slash: 'out/' would be written as a file 'out'
+        raise OutputError(f"cannot write {what} '{path}': it names a folder; give a file name")
     path = Path(path)
     if writes_in_place(path):
         if special_ok:
@@ -612,9 +621,44 @@ def check_output_path(path, *, overwrite: bool = False, what: str = "output", sp
         raise OutputError(f"cannot write {what} '{path}': folder '{folder}' is not writable")
     if path.is_dir():
         raise OutputError(f"cannot write {what} '{path}': it is a folder")
-    if path.exists() and not overwrite:
+    if (path.exists() or path.is_symlink()) and not overwrite:  # a dangling link is a name taken too
         raise OutputError(f"{what} '{path}' already exists; use --overwrite to replace it{keep_hint}")
     return path
+
+
+def move_into_place(temp: Path, path: Path, *, overwrite: bool = False, what: str = "output") -> None:
+    """Rename the finished temporary file ``temp`` to ``path`` (same folder).
+
+    With ``overwrite`` an existing ``path`` is replaced. Without it the name is claimed only if still free: another
+    run writing the same name at the same time (``xargs -P`` over videos of one name in different folders, both
+    with ``--out-dir tracks``) passed :func:`check_output_path` too, and a plain rename would silently replace the
+    output of whichever finished first. The file is linked to its name, which fails if the name exists, and the
+    temporary name removed; on a file system without hard links the name is checked once more and renamed over.
+
+    Raises
+    ------
+    OutputError
+        If ``path`` exists and ``overwrite`` is False (``temp`` is left for the caller to delete).
+    OSError
+        If the rename fails otherwise.
+    """
+    if overwrite:
+        os.replace(temp, path)
+        return
+    taken = OutputError(f"{what} '{path}' already exists (written while this run went on); use --overwrite to "
+                        f"replace it")
+    try:
+        os.link(temp, path)
+    except FileExistsError:
+        raise taken from None
+    except OSError as exc:
+        if exc.errno not in (errno.EPERM, errno.EOPNOTSUPP, errno.ENOTSUP, errno.EMLINK, errno.ENOSYS):
+            raise
+        if path.exists() or path.is_symlink():
+            raise taken from None
+        os.replace(temp, path)
+        return
+    temp.unlink(missing_ok=True)
 
 
 def writes_in_place(path) -> bool:
@@ -704,6 +748,9 @@ class VideoWriter:
                               f"use one of {', '.join(CODECS_BY_EXTENSION)}")
         if not (math.isfinite(fps) and fps > 0):
             raise OutputError(f"cannot write video '{wanted}': frame rate must be > 0, got {fps}")
+        if fps < MIN_VIDEO_FPS:  # refused now, not after the whole run was tracked
+            raise OutputError(f"cannot write video '{wanted}': {fps:g} frames/s is below the {MIN_VIDEO_FPS:g} the "
+                              f"video encoders take; give a higher --fps, or --no-video")
         self.path = check_output_path(wanted, overwrite=overwrite, what="output video")
         self.wanted_path = self.path
         self.fps = float(fps)
@@ -798,7 +845,7 @@ class VideoWriter:
                 raise OutputError(f"cannot write video '{self.path}': the {self.fourcc} encoder produced "
                                   f"no data")
             self._check_readable()
-            os.replace(self._temp, self.path)
+            move_into_place(self._temp, self.path, overwrite=self.overwrite, what="output video")
         except OSError as exc:
             self._temp.unlink(missing_ok=True)
             raise OutputError(f"cannot write video '{self.path}': {exc.strerror or exc}") from None

@@ -115,6 +115,40 @@ def test_existing_csv_refused_unless_overwrite(tmp_path):
     assert target.read_text() == GOLDEN_HEADER
 
 
+@pytest.mark.parametrize("overwrite", [False, True])
+def test_a_csv_written_meanwhile_by_another_run_is_kept_unless_overwrite(tmp_path, overwrite):
+    # Two runs writing one name at once (xargs -P over two folders' cam.mp4 into one --out-dir) both pass the check
+    # at the start; the second to finish must not replace the first's rows without --overwrite.
+    target = tmp_path / "run.csv"
+    writer = CsvWriter(target, overwrite=overwrite)
+    writer.write(_result(0, status="init"))
+    target.write_text("the other run's rows")
+    if overwrite:
+        writer.close()
+        assert target.read_text().startswith(GOLDEN_HEADER)
+    else:
+        with pytest.raises(OutputError, match=r"'.*run.csv' already exists \(written while this run went on\); "
+                                              r"use --overwrite"):
+            writer.close()
+        assert target.read_text() == "the other run's rows"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.csv"]  # no temporary file left
+
+
+def test_a_dangling_link_at_the_csv_name_is_refused_unless_overwrite(tmp_path):
+    target = tmp_path / "run.csv"
+    target.symlink_to(tmp_path / "gone.csv")
+    with pytest.raises(OutputError, match="already exists"):
+        CsvWriter(target)
+    assert target.is_symlink()
+
+
+def test_a_name_ending_in_a_slash_is_a_folder_not_a_file(tmp_path):
+    # Path() drops the slash: 'out/' was written as a file named 'out'.
+    with pytest.raises(OutputError, match=r"out/': it names a folder; give a file name"):
+        CsvWriter(f"{tmp_path}/out/")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_missing_folder(tmp_path):
     with pytest.raises(OutputError, match="does not exist"):
         CsvWriter(tmp_path / "nowhere" / "run.csv")

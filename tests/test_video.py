@@ -176,6 +176,16 @@ def test_zero_byte_file(tmp_path):
         VideoReader(empty)
 
 
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="named pipes are POSIX")
+def test_a_named_pipe_or_device_is_said_to_be_no_video_file(tmp_path):
+    # OpenCV seeks in a video; a pipe was reported as "empty (0 bytes)", and must not be waited on either.
+    fifo = tmp_path / "stream.mp4"
+    os.mkfifo(fifo)
+    for path in (fifo, Path("/dev/zero")):
+        with pytest.raises(VideoError, match=r"is a pipe or device, not a video file; .*save the stream to a file"):
+            VideoReader(path)
+
+
 def test_video_closed_without_frames(tmp_path):
     path = tmp_path / "noframes.avi"
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (64, 48))
@@ -463,6 +473,25 @@ def test_writer_refuses_existing_unless_overwrite(tiny_video, tmp_path):
     with VideoWriter(target, 30.0, overwrite=True) as writer:
         writer.write(tiny_video.frames[0])
     assert count_frames(target)[0] == 1
+
+
+def test_a_frame_rate_no_encoder_takes_is_refused_before_any_frame(tmp_path):
+    with pytest.raises(OutputError, match=r"0.001 frames/s is below the 0.002 the video encoders take"):
+        VideoWriter(tmp_path / "out.mp4", 0.001)
+    with VideoWriter(tmp_path / "slow.mp4", 0.002) as writer:  # the lowest taken
+        writer.write(np.zeros((48, 64, 3), np.uint8))
+    assert count_frames(tmp_path / "slow.mp4")[0] == 1
+
+
+def test_a_video_written_meanwhile_by_another_run_is_kept(tiny_video, tmp_path):
+    target = tmp_path / "out.mp4"
+    writer = VideoWriter(target, 30.0)
+    writer.write(tiny_video.frames[0])
+    target.write_bytes(b"the other run's video")
+    with pytest.raises(OutputError, match=r"already exists \(written while this run went on\)"):
+        writer.close()
+    assert target.read_bytes() == b"the other run's video"
+    assert [p.name for p in tmp_path.iterdir() if "out" in p.name] == ["out.mp4"]  # no temporary file left
 
 
 @pytest.mark.parametrize("where, fragment", [("missing/out.mp4", "does not exist"),

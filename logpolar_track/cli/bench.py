@@ -133,7 +133,7 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     # Outputs are checked before the work (a benchmark may run for hours), as `lptrack run` checks its own.
     _check_json_out(json_out, overwrite)
     if speed:
-        _speed(trackers, json_out, quiet)
+        _speed(trackers, json_out, quiet, overwrite)
         return
     if plot_out is not None:
         check_image_suffix(plot_out, PLOT_SUFFIXES, "plot")
@@ -207,14 +207,14 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
         table = f"Means over {starts} starts per sequence (--starts; per-start AUCs in --json).\n" + table
         if paired:
             table += "\n" + format_paired(paired)
-    _emit(table, doc, json_out)
+    _emit(table, doc, json_out, overwrite)
     if plot_out is not None:
         # Which run a plot shows is not in its curves: say it, as the table's row names do.
         caption = f"{len(sequences)} sequence{'s' if len(sequences) != 1 else ''}"
         caption += " played backwards" if backwards else ""
         caption += f", every {_ordinal(every)} frame" if every > 1 else ""
         caption += f", means over {starts} starts" if starts > 1 else ""
-        plot_curves(summary, plot_out, caption)
+        plot_curves(summary, plot_out, caption, overwrite=overwrite)
     for r in failed:
         click.echo(f"lptrack: error: {r['tracker']} failed on {r['sequence']}: {r['error']}", err=True)
     if failed:
@@ -235,7 +235,7 @@ def _check_json_out(json_out: str | None, overwrite: bool) -> None:
         check_output_path(json_out, overwrite=overwrite, what="JSON output", special_ok=True)
 
 
-def _speed(trackers: str | None, json_out: str | None, quiet: bool) -> None:
+def _speed(trackers: str | None, json_out: str | None, quiet: bool, overwrite: bool) -> None:
     """``lptrack bench --speed``: the Table 4.1 reproduction (see :mod:`logpolar_track.speed`)."""
     from ..speed import format_report, frames_from_environment, speed_report
 
@@ -250,7 +250,7 @@ def _speed(trackers: str | None, json_out: str | None, quiet: bool) -> None:
                        on_step=(lambda label: click.echo(f"lptrack: timing {label}", err=True)) if show else None)
     doc["skipped_trackers"] = [{"tracker": n, "reason": why} for n, why in skipped]
     table = format_report(doc)
-    _emit(table, doc, json_out)
+    _emit(table, doc, json_out, overwrite)
 
 
 def _runnable_trackers(spec: str | None) -> tuple[list[str], list[tuple[str, str]]]:
@@ -291,7 +291,7 @@ def _first_line(path: Path) -> str:
         return ""
 
 
-def _emit(table: str, doc: dict | None, json_out: str | None) -> None:
+def _emit(table: str, doc: dict | None, json_out: str | None, overwrite: bool) -> None:
     """The table on stdout and the JSON document to ``json_out``; with ``--json -`` the table goes to stderr."""
     if json_out is not None:
         text = json.dumps(doc, indent=1) + "\n"
@@ -299,7 +299,7 @@ def _emit(table: str, doc: dict | None, json_out: str | None) -> None:
             click.echo(table, err=True, nl=False)
             write_stdout(text)
             return
-        write_text_atomic(json_out, text)
+        write_text_atomic(json_out, text, overwrite=overwrite)
     write_stdout(table)
 
 
@@ -345,5 +345,5 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, ove
     if json_out == "-":
         write_stdout(text)
     else:
-        write_text_atomic(json_out, text)
+        write_text_atomic(json_out, text, overwrite=overwrite)
         write_stdout(table)

@@ -240,9 +240,11 @@ def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None,
             if read_stdin:
                 raise UsageError("'-' (video paths on standard input) can be given only once")
             read_stdin = True
-            listing = (stdin if stdin is not None else sys.stdin).read()
+            listing = _video_listing(stdin if stdin is not None else sys.stdin)
             if "\0" in listing:  # find -print0: names exactly as written, NUL after each
                 names = [name for name in listing.split("\0") if name.strip("\n")]
+                if names and not listing.endswith("\0"):  # the line end of an echo or printf after the last name
+                    names[-1] = names[-1].rstrip("\n")
             else:
                 names = [line.strip() for line in listing.splitlines()]
                 names = [name for name in names if name and not name.startswith("#")]
@@ -270,6 +272,32 @@ def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None,
             continue
         kept.append(video)
     return kept
+
+
+def _video_listing(stream) -> str:
+    """All of ``stream`` (text): the list of video paths given as ``-``.
+
+    Raises
+    ------
+    UsageError
+        ``stream`` is closed (``<&-``), or holds binary data: a video piped in (``cat clip.mp4 | lptrack run -``)
+        gave dozens of lines naming junk files.
+    """
+    what = "'-' reads the videos' paths from standard input"
+    if stream is None:
+        raise UsageError(f"{what}, which is closed")
+    head = stream.read(_BINARY_SAMPLE)
+    # Bytes that are not UTF-8 arrive as lone surrogates; a file name has few of them or of control characters,
+    # a video has them everywhere.
+    odd = sum(1 for c in head if ("\udc80" <= c <= "\udcff") or (c < " " and c not in "\t\n\r\0"))
+    if odd > _BINARY_SHARE * len(head):
+        raise UsageError(f"{what}, one per line (or NUL-separated, as find -print0 writes), but it holds binary data "
+                         f"(a video piped in?); give the video's path instead")
+    return head + stream.read()
+
+
+#: How much of standard input is looked at, and the share of it that may be bytes no list of paths has.
+_BINARY_SAMPLE, _BINARY_SHARE = 65536, 0.05
 
 
 def _is_number(text: str) -> bool:

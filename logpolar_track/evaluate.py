@@ -673,14 +673,30 @@ def read_track_csv(path) -> Track:
         # A batch's stream (``lptrack run a.mp4 b.mp4 --csv -``): its videos' frame numbers overlap, and the last
         # video's rows were scored against the first one's ground truth.
         raise several_videos(path, [str(v) for v in videos], "score one video's run")
-    try:
-        frames = np.array([int(float(r["frame"])) for r in rows])
-        ell = np.array([[_float(r[c]) for c in ("cx", "cy", "a", "b", "angle_deg")] for r in rows], float)
-        scale = np.array([_float(r.get("scale", "1")) for r in rows], float)
-        rot = np.array([_float(r.get("rotation_deg")) for r in rows], float)
-        score = np.array([_float(r.get("score", "1")) for r in rows], float)
-    except (TypeError, ValueError) as exc:
-        raise GroundTruthError(f"run CSV '{path}' has a field that is not a number ({exc})") from None
+    for line, row in zip(lines, rows):
+        if None in row.values():  # a row cut short (a file copied while it was written, or cut with head -c)
+            fields = sum(value is not None for value in row.values())
+            raise GroundTruthError(f"run CSV '{path}' line {line} has {fields} fields; expected {len(header)} "
+                                   f"({','.join(header)})")
+
+    def numbers(column: str, default: str | None = None) -> np.ndarray:
+        values = []
+        for line, row in zip(lines, rows):
+            text = row.get(column, default)
+            try:
+                values.append(_float(text))
+            except ValueError:
+                raise GroundTruthError(f"run CSV '{path}' line {line}: {column} '{text}' is not a number") from None
+        return np.array(values, float)
+
+    frame_numbers = numbers("frame")
+    bad_frame = np.flatnonzero(~np.isfinite(frame_numbers) | (frame_numbers != np.round(frame_numbers)))
+    if bad_frame.size:
+        raise GroundTruthError(f"run CSV '{path}' line {lines[bad_frame[0]]}: frame '{rows[bad_frame[0]]['frame']}' "
+                               f"is not a frame index (integer >= 0)")
+    frames = frame_numbers.astype(int)
+    ell = np.column_stack([numbers(c) for c in ("cx", "cy", "a", "b", "angle_deg")])
+    scale, rot, score = numbers("scale", "1"), numbers("rotation_deg"), numbers("score", "1")
     back = np.flatnonzero(np.diff(frames) <= 0)
     if back.size:
         line = lines[back[0] + 1]

@@ -206,7 +206,8 @@ def parse_roi(spec: str) -> Ellipse:
     text = str(spec).strip()
     if not text:
         raise RoiError(f"the ROI is empty; expected {ROI_SYNTAX}")
-    fields = [f.strip() for f in text.split(",")]
+    # A minus sign copied from typeset text (U+2212) is a minus.
+    fields = [f.strip().replace("\u2212", "-") for f in text.split(",")]
     if len(fields) == 1 and len(text.replace(";", " ").split()) > 1:
         raise RoiError(f"ROI '{spec}': separate the numbers with commas; expected {ROI_SYNTAX}")
     if "" in fields and len(fields) > 1:

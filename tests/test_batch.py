@@ -394,6 +394,24 @@ def test_find_videos_reads_find_print0_from_stdin():
     listing = "./a b.mp4\0#c.mp4\0./new\nline.mp4\0"
     found = find_videos(["-"], stdin=io.StringIO(listing))
     assert found == [VideoInput(Path("./a b.mp4")), VideoInput(Path("#c.mp4")), VideoInput(Path("./new\nline.mp4"))]
+    # printf '%s\0%s\n' a b: the line end after the last name is not part of it
+    found = find_videos(["-"], stdin=io.StringIO("a.mp4\0b.mp4\n"))
+    assert found == [VideoInput(Path("a.mp4")), VideoInput(Path("b.mp4"))]
+
+
+def test_standard_input_closed_or_holding_a_video_is_said_so(monkeypatch):
+    """``lptrack run - <&-`` gave a traceback, and ``cat clip.mp4 | lptrack run -`` dozens of notes about file names
+    of binary junk: both are one usage error saying what '-' reads."""
+    monkeypatch.setattr(sys, "stdin", None)
+    with pytest.raises(UsageError, match="standard input, which is closed"):
+        find_videos(["-"])
+    # A video's bytes as the text layer gives them: not UTF-8 (lone surrogates) and control characters.
+    header = "\0\0\0\x20ftypisom\0\0\x02\0isomiso2mp41\0\0\x08\x1e" + "\udcb3\udcf6q\x05" * 200
+    with pytest.raises(UsageError, match=r"holds binary data \(a video piped in\?\); give the video's path"):
+        find_videos(["-"], stdin=io.StringIO(header))
+    # A list of paths with one name that is not UTF-8 is still a list of paths.
+    listing = "a.mp4\n" * 30 + "caf\udce9.mp4\n"
+    assert len(find_videos(["-"], stdin=io.StringIO(listing))) == 2
 
 
 def test_a_shell_glob_does_not_track_lptracks_own_videos_beside_their_sources(tmp_path):

@@ -16,7 +16,8 @@ from logpolar_track.geometry import Ellipse, check_roi_fits, parse_roi, wrap_deg
     (" 100 , 80 , 20 ", Ellipse(100, 80, 20, 20, 0)),
     ("10.5,20.25,30,15,-45", Ellipse(10.5, 20.25, 30, 15, -45)),
     ("1e2,8e1,2e1", Ellipse(100, 80, 20, 20, 0)),
-], ids=["circle", "spaces", "ellipse", "exponent"])
+    ("100,80,30,15,\u221245", Ellipse(100, 80, 30, 15, -45)),  # a minus sign copied from typeset text
+], ids=["circle", "spaces", "ellipse", "exponent", "typeset-minus"])
 def test_parse_roi_accepts(spec, expected):
     assert parse_roi(spec) == expected
 

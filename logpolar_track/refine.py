@@ -106,15 +106,21 @@ class AppearanceSubspace:
             patch = patch - cv2.GaussianBlur(patch, (0, 0), self.highpass_sigma, borderType=cv2.BORDER_REPLICATE)
         return patch
 
-    def _distance(self, x: np.ndarray, outside: np.ndarray | None = None) -> float:
-        """:meth:`distance` of a weighted patch ``x``, given its part ``outside`` the subspace if known."""
+    def _distance(self, x: np.ndarray, outside: np.ndarray | None = None, varying: float | None = None) -> float:
+        """:meth:`distance` of a weighted patch ``x``, given its part ``outside`` the subspace and its
+        :meth:`_varying` norm if known."""
         if outside is None:
             outside = x - self.basis @ (self.basis.T @ x)
-        constant_part = float(self._constant @ x)
-        varying = math.sqrt(max(float(x @ x) - constant_part * constant_part, 0.0))
+        if varying is None:
+            varying = self._varying(x)
         if varying <= _FLAT * self._first_varying:
             return 1.0  # a featureless patch (off the frame, a flat cover) is not the object
         return math.sqrt(float(outside @ outside)) / varying
+
+    def _varying(self, x: np.ndarray) -> float:
+        """Weighted norm of the part of a weighted patch ``x`` that is not constant."""
+        constant_part = float(self._constant @ x)
+        return math.sqrt(max(float(x @ x) - constant_part * constant_part, 0.0))
 
     def _summary(self) -> list[np.ndarray]:
         stacked = np.stack(self._recent, axis=1)
@@ -148,7 +154,9 @@ class AppearanceSubspace:
 
     @staticmethod
     def _orthonormal(columns: list[np.ndarray]) -> np.ndarray:
-        q, r = np.linalg.qr(np.stack(columns, axis=1))
+        # The columns as the transpose of their rows, not stacked column-wise (a strided copy): the same matrix, which
+        # the QR reads into its own Fortran-order buffer either way.
+        q, r = np.linalg.qr(np.array(columns).T)
         # Columns that added nothing new (a patch equal to the first) would bring noise directions: drop them.
         keep = np.abs(np.diag(r)) > 1e-4 * max(float(np.abs(np.diag(r)).max()), 1e-12)
         return np.ascontiguousarray(q[:, keep], dtype=np.float32)
@@ -189,15 +197,17 @@ def similarity_step(patch: np.ndarray, subspace: AppearanceSubspace, damping: fl
     # Project the error and the Jacobian out of the subspace: appearance it explains is not motion. With J' the
     # projected Jacobian, J'^T J' = J^T J - (B^T J)^T (B^T J) and J'^T e' = J^T e' for the projected error e'.
     error = x - basis @ (basis.T @ x)
-    distance = subspace._distance(x, error)
+    varying = subspace._varying(x)  # shared by both distances
+    distance = subspace._distance(x, error, varying)
     if anchor_below > 0:
         anchor = subspace.anchor_basis
         anchor_error = x - anchor @ (anchor.T @ x)
-        if subspace._distance(x, anchor_error) < anchor_below:
+        if subspace._distance(x, anchor_error, varying) < anchor_below:
             basis, error = anchor, anchor_error
     in_basis = basis.T @ jacobian
     normal = (jacobian.T @ jacobian - in_basis.T @ in_basis).astype(np.float64)
-    normal.flat[::5] += damping * float(np.trace(normal)) / 4 + 1e-9
+    diagonal = normal.ravel()[::5]  # a view (normal is contiguous); the same sum as np.trace, a third the cost
+    diagonal += damping * float(diagonal.sum()) / 4 + 1e-9
     _, step = cv2.solve(normal, -(jacobian.T @ error[:, None]).astype(np.float64), flags=cv2.DECOMP_CHOLESKY)
     return step.ravel(), distance
 
@@ -214,8 +224,12 @@ def _motion_jacobian(prepared: np.ndarray, subspace: AppearanceSubspace) -> np.n
     jacobian = np.empty((len(u), 4), np.float32)
     jacobian[:, 0] = grad_u
     jacobian[:, 1] = grad_v
-    jacobian[:, 2] = grad_u * u + grad_v * v
-    jacobian[:, 3] = grad_u * v - grad_v * u
+    # Products into the columns, then the other products added or taken in place: the same roundings, two
+    # temporaries fewer.
+    np.multiply(grad_u, u, out=jacobian[:, 2])
+    jacobian[:, 2] += grad_v * v
+    np.multiply(grad_u, v, out=jacobian[:, 3])
+    jacobian[:, 3] -= grad_v * u
     return jacobian
 
 

@@ -438,7 +438,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         rings = self.correlator.window.mean(axis=1)
         self._ring_weights = rings / float(rings.sum())
         frequency = np.fft.rfftfreq(self.n_theta)  # cycles per bin
-        self._angle_smoothing = np.exp(-(2 * np.pi * frequency * _TURN_SMOOTHING_BINS) ** 2)
+        self._angle_weights = _angular_weights(np.exp(-(2 * np.pi * frequency * _TURN_SMOOTHING_BINS) ** 2),
+                                               self.n_theta)
         # Packed spectra need even sizes; odd ones keep the plain NumPy correlator.
         self.packed_correlator = (PackedPhaseCorrelator(self.correlator)
                                   if self.n_rho % 2 == 0 and self.n_theta % 2 == 0 else None)
@@ -808,14 +809,15 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         if found_elsewhere or lp_height < _PREDICTED_MIN_MATCH:
             self._recent_turns = []
             return 0.0, 0.0
-        self._recent_turns = (self._recent_turns + [turn_deg])[-_STEADY_TURN_FRAMES:]
-        recent = np.array(self._recent_turns)
+        recent = self._recent_turns = (self._recent_turns + [turn_deg])[-_STEADY_TURN_FRAMES:]
+        # Python's all() over the few turns: an array and its comparisons cost more than the test, every frame.
         steady = (len(recent) == _STEADY_TURN_FRAMES
-                  and (np.all(recent >= _STEADY_TURN_MIN) or np.all(recent <= -_STEADY_TURN_MIN)))
+                  and (all(each >= _STEADY_TURN_MIN for each in recent)
+                       or all(each <= -_STEADY_TURN_MIN for each in recent)))
         if abs(turn_deg) >= self.rotation_sigma:
             turn = self.velocity_damping * turn_deg
         elif steady:
-            turn = self.velocity_damping * float(recent.mean())
+            turn = self.velocity_damping * float(np.mean(recent))
         else:
             turn = 0.0
         zoom = self.velocity_damping * log_zoom if abs(log_zoom) >= _PREDICTED_ZOOM * self.scale_sigma else 0.0
@@ -1217,8 +1219,11 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             if rows is None:
                 rows = self._scale_rows(frame, state, self.shown_scale)
             self._scale_filter.learn(rows, 1 - (1 - self.scale_filter_rate) ** frames)
-        self.numerator = (1 - rate) * self.numerator + rate * self.label_conj * spec
-        self.denominator = (1 - rate) * self.denominator + rate * self.spectra.power(spec)
+        # In place (the spectra are the tracker's own): the same arithmetic without two temporaries of C spectra each.
+        self.numerator *= 1 - rate
+        self.numerator += rate * self.label_conj * spec
+        self.denominator *= 1 - rate
+        self.denominator += rate * self.spectra.power(spec)
         self._filter()
         if self.appearance is not None:
             self.appearance.add(self._patch(frame, state, self.appearance_size))
@@ -1374,7 +1379,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self._references = [self.packed_correlator.reference(image) for image in images]
         else:
             self._references = self.correlator.spectrum(np.stack(images))
-        self._turn_seen = (_angular_share(self.lp_model, self._ring_weights, self._angle_smoothing)
+        self._turn_seen = (_angular_share(self.lp_model, self._ring_weights, self._angle_weights)
                            >= _TURN_UNSEEN)
 
     def _likeness(self) -> float:
@@ -1397,11 +1402,15 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         width, height = self.frame_size
         return min(x, y, width - 1 - x, height - 1 - y)
 
-    def _samples_to_pixels(self, d_across: float, d_down: float, state: Similarity) -> np.ndarray:
+    def _samples_to_pixels(self, d_across: float, d_down: float, state: Similarity) -> tuple[float, float]:
         """A move of ``(d_across, d_down)`` samples along the patch's axes at ``state`` as ``(dx, dy)`` pixels on
-        screen (y down)."""
+        screen (y down): :func:`~logpolar_track.geometry.rotate_screen`'s arithmetic in Python floats (a few times a
+        frame; the array cost more than the rotation, and its elements made the states' centres NumPy scalars)."""
         step, scale = self.step, state.scale
-        return rotate_screen((d_across * step * scale, d_down * step * scale), self._axes_deg(state))
+        x, y = float(d_across * step * scale), float(d_down * step * scale)
+        t = math.radians(self._axes_deg(state))
+        c, s = math.cos(t), math.sin(t)
+        return x * c + y * s, -x * s + y * c
 
     def _pixels_to_samples(self, dx: float, dy: float, state: Similarity) -> np.ndarray:
         """The inverse of :meth:`_samples_to_pixels`: a move of ``(dx, dy)`` pixels on screen as ``(d_across,
@@ -2203,19 +2212,30 @@ def _match(peak: float, lp_height: float, similarity: float) -> float:
     return min(math.sqrt(max(peak, 0.0) * max(lp_match, 0.0)), 1.0)
 
 
-def _angular_share(image: np.ndarray, ring_weights: np.ndarray, smoothing: np.ndarray) -> float:
+def _angular_share(image: np.ndarray, ring_weights: np.ndarray, weights: np.ndarray) -> float:
     """Share (0 to 1) of a log-polar image's variance that lies along its rings (across angles) rather than between
     them, once smoothed across angles: 0 for an image that is the same at every angle.
 
-    ``ring_weights`` ``(n_rho,)`` weigh the rings (summing to 1); ``smoothing`` ``(n_theta // 2 + 1,)`` is the
-    squared frequency response of the smoothing across angles, per frequency of a real FFT along the rings (its
-    first value, 1, the rings' means)."""
+    ``ring_weights`` ``(n_rho,)`` weigh the rings (summing to 1); ``weights`` (:func:`_angular_weights`) weigh each
+    ring's power spectrum across angles into the total and into the smoothed part across angles. The spectra are
+    OpenCV's packed ones (``cv2.dft`` by rows), whose squares are the power without forming it per frequency: a
+    third less time than NumPy's real FFT and ``abs() ** 2``, equal to float rounding."""
     centred = image - np.float32(ring_weights @ image.mean(axis=1))
-    power = np.abs(np.fft.rfft(centred, axis=1)) ** 2
-    power[:, 1:(image.shape[1] + 1) // 2] *= 2.0  # the frequencies a real FFT keeps once stand for two
-    total = float(ring_weights @ power.sum(axis=1))
-    across = float(ring_weights @ (power[:, 1:] @ smoothing[1:]))
-    return across / total if total > 0 else 0.0
+    packed = cv2.dft(centred, flags=cv2.DFT_ROWS)
+    total, across = weights @ (ring_weights @ (packed * packed))
+    return float(across / total) if total > 0 else 0.0
+
+
+def _angular_weights(smoothing: np.ndarray, n_theta: int) -> np.ndarray:
+    """``(2, n_theta)``: what the square of each value of a packed real spectrum along a ring (``cv2.dft`` by rows: the
+    real part of frequency 0, the real and imaginary parts of 1, 2, ..., and for an even ``n_theta`` the real part of
+    ``n_theta / 2``) counts for in :func:`_angular_share`'s total and in its smoothed part across angles, from
+    ``smoothing`` ``(n_theta // 2 + 1,)``, the squared frequency response of the smoothing across angles per frequency
+    of a real FFT (its first value, 1, the rings' means, which are not across angles)."""
+    nyquist = [n_theta // 2] if n_theta % 2 == 0 else []
+    frequency = np.concatenate([[0], np.repeat(np.arange(1, (n_theta + 1) // 2), 2), nyquist]).astype(np.intp)
+    twice = np.where((frequency > 0) & (2 * frequency != n_theta), 2.0, 1.0)  # the frequencies kept once stand for two
+    return np.stack([twice, np.where(frequency > 0, twice * smoothing[frequency], 0.0)])
 
 
 def _nearest_bin(shift: float, n: int) -> int:

@@ -29,7 +29,7 @@ from . import __version__
 from .datasets import SEARCH_DEPTH, Sequence, discover, discover_one
 from .errors import OutputError, RoiError, UsageError
 from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
-                       auc, score_track)
+                       auc, score_track, success_curve)
 from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_threads, run_tasks
 from .geometry import Ellipse
 from .look import PLOT_SUFFIXES, check_image_suffix
@@ -238,7 +238,23 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
               "update_time_s": update_time, "fps": updates / update_time if update_time > 0 else math.nan,
               "error": error}
     result.update(score_track(sequence.gt, track))
+    if sequence.passes > 1:
+        result["auc_per_pass"] = auc_per_pass(sequence, result["frames"], result["iou"])
     return result
+
+
+def auc_per_pass(sequence: Sequence, frames, iou) -> list[float]:
+    """The IoU success AUC of each pass of a sequence played there and back
+    (:meth:`~logpolar_track.datasets.Sequence.there_and_back`), from the scored ``frames`` and their ``iou``
+    (:func:`~logpolar_track.evaluate.score_track`'s); NaN for a pass with no frame scored (a run that stopped)."""
+    frames, iou = np.asarray(frames, int), np.nan_to_num(np.asarray(iou, float))
+    m = sequence.pass_frames
+    ends = [m + k * (m - 1) for k in range(sequence.passes)]
+    out = []
+    for begin, end in zip([0] + ends[:-1], ends):
+        chosen = (frames >= begin) & (frames < end)
+        out.append(auc(success_curve(iou[chosen])) if chosen.any() else math.nan)
+    return out
 
 
 def _run_pair(pair: tuple, report=None) -> dict:
@@ -310,6 +326,8 @@ def mean_over_starts(runs: list[dict]) -> dict:
     merged["fps"] = merged["updates"] / merged["update_time_s"] if merged["update_time_s"] > 0 else math.nan
     merged["starts"] = len(runs)
     merged["auc_per_start"] = [r["auc"] for r in runs]
+    if any("auc_per_pass" in r for r in runs):
+        merged["auc_per_pass"] = _mean_per_pass([r.get("auc_per_pass") for r in scored])
     failed = [r for r in runs if r["error"]]
     merged["failed_starts"] = [r["start"] for r in failed]
     merged["error"] = f"start {failed[0]['start']}: {failed[0]['error']}" if failed else None
@@ -322,6 +340,12 @@ def _failed_pair(sequence: Sequence, tracker: str, error: str, start: int = 0) -
     result.update(score_track(sequence.gt, Track(np.zeros(0, int), np.zeros((0, 5)), np.zeros(0), np.zeros(0),
                                                  np.zeros(0))))
     return result
+
+
+def _mean_per_pass(lists) -> list[float | None]:
+    """Pass by pass, the mean of the ``auc_per_pass`` lists given (None ones left out; None where no value)."""
+    lists = [values for values in lists if values is not None]
+    return [_mean(values[k] for values in lists) for k in range(max(map(len, lists), default=0))]
 
 
 def _mean(values) -> float | None:
@@ -353,6 +377,8 @@ def summarise(results: list[dict], trackers: list[str]) -> list[dict]:
             "lost_rate": _mean(r["lost_rate"] for r in rs),
             "off_tracked_rate": _mean(r["off_tracked_rate"] for r in rs),
             "fps": updates / time_s if time_s > 0 else None,
+            **({"auc_per_pass": _mean_per_pass([r.get("auc_per_pass") for r in rs])}
+               if any("auc_per_pass" in r for r in rs) else {}),
             "success_curve": succ.tolist(),
             "success_curve_auc": auc(succ) if curves else None,
             "precision_curve": (np.mean(precs, axis=0) if precs else
@@ -410,6 +436,13 @@ def format_table(results: list[dict], summary: list[dict], *, speed: bool = True
             tracker = s["tracker"] + (f" ({s['errors']} failed)" if s.get("errors") else "")
             rows.append([f"mean ({n_seq})", tracker] + [_cell(s.get(key), fmt) for _, key, fmt in columns])
     return _aligned(header, rows, left=2)
+
+
+def format_passes(summary: list[dict]) -> str:
+    """Lines giving each tracker's mean IoU AUC per pass (sequences played there and back), or ''."""
+    lines = [f"  {s['tracker']}: " + " / ".join(_cell(v, ".3f") for v in s["auc_per_pass"])
+             for s in summary if s.get("auc_per_pass")]
+    return "Mean IoU AUC per pass (--passes):\n" + "\n".join(lines) + "\n" if lines else ""
 
 
 def _aligned(header: list[str], rows: list, left: int) -> str:
@@ -726,6 +759,6 @@ def eval_document(pred_path, gt_path, metrics: dict, *, per_frame: bool = True) 
 
 
 __all__ = ["run_one", "run_bench", "mean_over_starts", "start_roi", "STARTS", "summarise", "format_table",
-           "paired_differences", "format_paired",
+           "paired_differences", "format_paired", "auc_per_pass", "format_passes",
            "bench_document", "eval_document", "plot_curves", "resolve_trackers", "collect_sequences",
            "default_dataset", "write_text_atomic", "matplotlib_missing", "environment", "SCHEMA_VERSION"]

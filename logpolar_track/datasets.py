@@ -34,7 +34,7 @@ from typing import Iterator
 import numpy as np
 
 from .errors import InputError, UsageError, VideoError
-from .evaluate import GroundTruth, GroundTruthError, read_box_text, read_gt_csv
+from .evaluate import GroundTruth, GroundTruthError, read_box_text, read_gt_csv, there_and_back_rows
 from .geometry import Ellipse
 from .pipeline import read_roi_sidecar
 
@@ -82,6 +82,9 @@ class Sequence:
     notes : tuple of str
         What may put the ground truth out of step with the frames, found on reading the folder (a line count other
         than the image count, image numbers that skip): for a report to show.
+    passes, pass_frames : int
+        Made by :meth:`there_and_back`: the frames are played in ``passes`` passes, forwards and backwards in turn,
+        the first ``pass_frames`` long and each later one a frame shorter (otherwise 1 and 0).
     """
 
     name: str
@@ -98,6 +101,8 @@ class Sequence:
     frame_step: int = 1
     first_frame: int = 0
     notes: tuple = ()
+    passes: int = 1
+    pass_frames: int = 0
 
     def frames(self) -> Iterator[tuple[int, float, np.ndarray]]:
         """Yield ``(index, time_s, frame)`` for every frame, decoding one at a time (BGR uint8).
@@ -171,13 +176,39 @@ class Sequence:
                        fps=self.fps / n, frame_files=files, frame_step=self.frame_step * n,
                        first_frame=self.first_frame + self.start * self.frame_step)
 
+    def there_and_back(self, passes: int) -> "Sequence":
+        """This sequence played forwards and backwards in turn, ``passes`` passes over its frames from ``start`` (2:
+        there and back; :func:`~logpolar_track.evaluate.there_and_back_rows`), named ``<name>-passes<passes>``, each
+        frame with its own ground truth.
+
+        A long run over known footage: the ground truth of a frame is the same on every pass, so a tracker that
+        does not drift scores alike on each (see :func:`~logpolar_track.bench.auc_per_pass`). 1 gives the
+        sequence itself.
+
+        Raises
+        ------
+        UsageError
+            ``passes`` below 1, or a video (only image sequences are played backwards).
+        """
+        if passes < 1:
+            raise UsageError(f"passes takes a whole number >= 1, got {passes}")
+        if passes == 1:
+            return self
+        if self.frame_files is None:
+            raise UsageError(f"'{self.name}' is a video ({self.path.name}); only image sequences (OTB, VOT, UAV123 "
+                             "folders) can be played there and back")
+        rows = there_and_back_rows(self.start, len(self.frame_files), passes)
+        return replace(self, name=f"{self.name}-passes{passes}", gt=self.gt.there_and_back(self.start, passes),
+                       start=0, n_frames=len(rows), frame_files=tuple(self.frame_files[i] for i in rows),
+                       passes=passes, pass_frames=len(self.frame_files) - self.start)
+
     def describe(self) -> dict:
         """Plain-data summary for reports (JSON)."""
         return {"name": self.name, "kind": self.kind, "path": str(self.path), "ground_truth": str(self.gt_path),
                 "frames": self.n_frames, "scored_frames": int(self.gt.valid[: self.n_frames or None].sum()),
                 "rotated_ground_truth": bool(self.gt.rotated), "start_frame": self.start,
                 "roi": self.roi.to_spec(), "backwards": self.played_backwards, "frame_step": self.frame_step,
-                "first_frame": self.first_frame}
+                "first_frame": self.first_frame, "passes": self.passes}
 
 
 def _image_frames(files, fps: float, first_time_s: float = 0.0):

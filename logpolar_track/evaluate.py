@@ -358,9 +358,14 @@ class GroundTruth:
         every frame stays as unwrapped (every ``n``-th frame may turn by more than half a period between rows)."""
         return self._rows(slice(first, None, n))
 
-    def _rows(self, rows: slice) -> "GroundTruth":
-        """The ground truth of ``rows``, in their order, with ``scale`` and ``rotation_deg`` relative to its first
-        valid row."""
+    def there_and_back(self, first: int, passes: int) -> "GroundTruth":
+        """The ground truth of rows ``first`` to the last, then back to ``first``, and so on: ``passes`` passes
+        (:func:`there_and_back_rows`); ``scale`` and ``rotation_deg`` relative to the new first valid row."""
+        return self._rows(there_and_back_rows(first, len(self), passes))
+
+    def _rows(self, rows: slice | np.ndarray) -> "GroundTruth":
+        """The ground truth of ``rows`` (a slice or row indices), in their order, with ``scale`` and
+        ``rotation_deg`` relative to its first valid row."""
         valid = self.valid[rows]
         rotation = None if self.rotation_deg is None else _relative(self.rotation_deg[rows], valid, ratio=False)
         ellipses = None if self.ellipses is None else self.ellipses[rows].copy()
@@ -374,6 +379,17 @@ class GroundTruth:
             return Ellipse(*(float(v) for v in self.ellipses[i]))
         cx, cy, w, h, angle = (float(v) for v in self.boxes[i])
         return ellipse_in_rotated_rect(cx, cy, w, h, angle)
+
+
+def there_and_back_rows(first: int, n: int, passes: int) -> np.ndarray:
+    """Indices of frames ``first`` to ``n - 1`` played forwards and backwards in turn, ``passes`` passes: ``first``
+    .. ``n - 1``, then ``n - 2`` .. ``first``, then ``first + 1`` .. ``n - 1``, ... (the frame a pass turns on is
+    not shown twice). Every pass after the first has one frame fewer than it."""
+    if passes < 1 or not 0 <= first < n:
+        raise ValueError(f"need passes >= 1 and 0 <= first < n, got {passes}, {first}, {n}")
+    forwards = np.arange(first, n)
+    rows = [forwards] + [forwards[-2::-1] if k % 2 else forwards[1:] for k in range(1, passes)]
+    return np.concatenate(rows)
 
 
 def _relative(values: np.ndarray, valid: np.ndarray, *, ratio: bool) -> np.ndarray:

@@ -416,6 +416,42 @@ def test_bench_tracks_every_nth_frame(tmp_path, dataset):
     assert {r["frames_scored"] for r in doc["results"]} == {(N_FRAMES + 1) // 2}
 
 
+def test_bench_plays_image_sequences_there_and_back_and_scores_each_pass(tmp_path):
+    # The object travels 60 px and grows by 30 %, then goes back and again: three passes of 16, 15 and 15 frames.
+    roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
+    n = 16
+    poses = [Pose(60.0 + 4 * i, 70.0, 1.3 ** (i / (n - 1)), 0.0) for i in range(n)]
+    _otb_folder(tmp_path, "walk", poses, roi)
+    res = _run("bench", "--dataset", tmp_path, "--trackers", "lpcf", "--passes", "3", "--starts", "2", "--json", "-")
+    assert res.exit_code == 0, res.stderr
+    doc = json.loads(res.stdout)
+    assert doc["parameters"]["passes"] == 3
+    [seq], [result] = doc["sequences"], doc["results"]
+    assert seq["name"] == result["sequence"] == "walk-passes3" and seq["passes"] == 3
+    assert result["frames_scored"] == 46 and result["success_rate"] == 1.0
+    # Each pass scored on its own frames: followed on every pass, alike.
+    assert len(result["auc_per_pass"]) == 3 and min(result["auc_per_pass"]) > 0.75
+    assert doc["summary"][0]["auc_per_pass"] == result["auc_per_pass"]
+    shown = "Mean IoU AUC per pass (--passes):\n  lpcf: " + " / ".join(f"{v:.3f}" for v in result["auc_per_pass"])
+    assert shown in res.stderr  # the table goes to stderr with --json -
+
+
+def test_auc_per_pass_splits_the_frames_at_the_turns():
+    from logpolar_track.bench import auc_per_pass
+
+    class Played:  # a sequence of 4 frames played in 3 passes: frames 0-3, 4-6, 7-9
+        passes, pass_frames = 3, 4
+
+    frames = np.arange(10)
+    iou = np.array([1.0] * 4 + [0.0] * 3 + [0.5] * 3)
+    from logpolar_track.evaluate import auc, success_curve
+
+    expected = [auc(success_curve(np.full(n, value))) for n, value in ((4, 1.0), (3, 0.0), (3, 0.5))]
+    assert expected[0] > expected[2] > expected[1] == 0.0
+    assert auc_per_pass(Played, frames, iou) == pytest.approx(expected)
+    assert np.isnan(auc_per_pass(Played, frames[:5], iou[:5])[2])  # a run that stopped in the second pass
+
+
 def test_a_failed_run_is_marked_in_the_mean_it_enters(tmp_path):
     """A run stopped by an error is scored over the frames it reached; the mean row says one of its runs failed."""
     roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
@@ -535,16 +571,17 @@ def test_dataset_errors_say_where(tmp_path, dataset):
         f"give datasets whose names differ"]
 
 
-def test_bench_plays_only_image_sequences_backwards(dataset):
-    res = _run("bench", "--dataset", dataset, "--trackers", "fixed", "--backwards")
+@pytest.mark.parametrize("flag", [["--backwards"], ["--passes", "2"]])
+def test_bench_plays_only_image_sequences_backwards(dataset, flag):
+    res = _run("bench", "--dataset", dataset, "--trackers", "fixed", *flag)
     assert res.exit_code == 2 and res.stdout == ""
     assert res.stderr.strip().splitlines() == [
-        "lptrack: error: --backwards plays image sequences only (OTB, VOT, UAV123 folders), and alpha.avi is a "
+        f"lptrack: error: {flag[0]} plays image sequences only (OTB, VOT, UAV123 folders), and alpha.avi is a "
         "video; give --dataset with such folders"]
 
 
-SPEED_TAKES_NO = ("no --dataset, --per-frame, --plot, --starts, --backwards, --every, --threads, --param, --jobs "
-                  "or --scheduler")
+SPEED_TAKES_NO = ("no --dataset, --per-frame, --plot, --starts, --backwards, --every, --passes, --threads, --param, "
+                  "--jobs or --scheduler")
 
 
 @pytest.mark.parametrize("args, message", [
@@ -553,6 +590,8 @@ SPEED_TAKES_NO = ("no --dataset, --per-frame, --plot, --starts, --backwards, --e
     (["--backwards", "--speed"], SPEED_TAKES_NO),
     (["--every", "2", "--speed"], SPEED_TAKES_NO),
     (["--every", "0"], "x>=1"),
+    (["--passes", "2", "--speed"], SPEED_TAKES_NO),
+    (["--passes", "0"], "x>=1"),
     (["--threads", "2", "--speed"], SPEED_TAKES_NO),
     (["--param", "window=9", "--speed"], SPEED_TAKES_NO),
     (["--jobs", "2", "--speed"], SPEED_TAKES_NO),
@@ -730,12 +769,12 @@ def test_plot_says_what_was_run(dataset, tmp_path, monkeypatch):
         assert res.exit_code == 0, res.stderr
     roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
     _otb_folder(tmp_path / "otb", "still", [Pose(60.0, 70.0, 1.0, 0.0)] * 4, roi)
-    for extra in (["--backwards"], ["--backwards", "--every", "2"]):
+    for extra in (["--backwards"], ["--backwards", "--every", "2"], ["--passes", "2"]):
         res = _run("bench", "--dataset", tmp_path / "otb", "--trackers", "fixed", "--plot", tmp_path / "p.png",
                    "--overwrite", "-q", *extra)
         assert res.exit_code == 0, res.stderr
     assert captions == ["2 sequences", "2 sequences, means over 2 starts", "1 sequence played backwards",
-                        "1 sequence played backwards, every 2nd frame"]
+                        "1 sequence played backwards, every 2nd frame", "1 sequence, 2 passes there and back"]
 
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_videos"

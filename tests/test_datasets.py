@@ -87,6 +87,25 @@ def test_every_nth_frame_of_an_image_sequence_from_its_first_with_ground_truth(t
         seq.every(0)
 
 
+def test_an_image_sequence_played_there_and_back_from_its_first_frame_with_ground_truth(tmp_path):
+    # Frame 0 has a NaN line: the passes run over frames 1-4: 1 2 3 4, 3 2 1, 2 3 4.
+    lines = ["NaN,NaN,NaN,NaN"] + [f"{10 + i},21,{10 + i},6" for i in range(1, 5)]
+    (seq,) = discover(_otb(tmp_path, "walk", 5, lines))
+    three = seq.there_and_back(3)
+    assert (three.name, three.start, three.n_frames, three.passes, three.pass_frames) == ("walk-passes3", 0, 10, 3, 4)
+    assert [int(f.mean()) for _, _, f in three.frames()] == pytest.approx([20, 30, 40, 50, 40, 30, 20, 30, 40, 50],
+                                                                          abs=2)
+    assert three.gt.boxes[:, 2].tolist() == [11, 12, 13, 14, 13, 12, 11, 12, 13, 14]  # each frame's own line
+    assert three.gt.scale[[0, 6]].tolist() == [1.0, 1.0] and three.roi == seq.roi
+    assert three.describe()["passes"] == 3 and seq.describe()["passes"] == 1
+    # Played backwards first (from frame 4), then there and back: lines 4 3 2 1, frame 0's NaN, and back.
+    widths = seq.backwards().there_and_back(2).gt.boxes[:, 2]
+    assert np.array_equal(widths, [14, 13, 12, 11, np.nan, 11, 12, 13, 14], equal_nan=True)
+    assert seq.there_and_back(1) is seq
+    with pytest.raises(UsageError, match="passes takes a whole number >= 1, got 0"):
+        seq.there_and_back(0)
+
+
 def test_every_nth_frame_of_a_video(tmp_path):
     frames = [np.full((40, 64, 3), 20 * i, np.uint8) for i in range(8)]
     writer = cv2.VideoWriter(str(tmp_path / "disc.avi"), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (64, 40))

@@ -9,8 +9,8 @@ from pathlib import Path
 import click
 
 from ..bench import (STARTS, bench_document, collect_sequences, default_dataset, eval_document, format_paired,
-                     format_table, matplotlib_missing, paired_differences, plot_curves, resolve_trackers, run_bench,
-                     summarise, write_text_atomic)
+                     format_passes, format_table, matplotlib_missing, paired_differences, plot_curves, resolve_trackers,
+                     run_bench, summarise, write_text_atomic)
 from ..errors import UsageError
 from ..executor import TRACKING_OPENCV_THREADS
 from ..look import PLOT_SUFFIXES, check_image_suffix
@@ -60,6 +60,7 @@ Examples:
   lptrack bench --dataset ~/data/otb --trackers lpcf,cv-csrt --starts 13 -j 2
   lptrack bench --dataset ~/data/otb --trackers lpcf,cv-csrt --backwards
   lptrack bench --dataset ~/data/otb --trackers lpcf,cv-csrt --every 3
+  lptrack bench --dataset ~/data/otb --trackers lpcf,cv-csrt --passes 4
   lptrack bench --dataset ~/data/otb --trackers lpcf --param padding=1.5
 """
 
@@ -97,6 +98,12 @@ Examples:
                    "frame 0 with a .roi sidecar; rows named NAME-everyN): the same footage at 1/N of its frame rate, "
                    "N times the motion between frames. With --backwards: every N-th frame of the sequence played "
                    "backwards.")
+@click.option("--passes", type=click.IntRange(min=1), default=1, show_default=True, metavar="N",
+              help="Play each sequence forwards and backwards in turn, N passes over its frames (2: there and back; "
+                   "image sequences only; rows named NAME-passesN), each frame scored against its own ground truth, "
+                   "the same on every pass: a long run over known footage, where a tracker that drifts scores less "
+                   "pass after pass (each tracker's mean AUC per pass below the table, and per sequence in --json). "
+                   "With --backwards or --every: of the sequence so played.")
 @click.option("--threads", type=click.IntRange(min=1), default=None, metavar="N",
               help="OpenCV threads per tracker. Default 1: every tracker, lptrack's and OpenCV's, on one core, so "
                    "frames/s compare per core (more lets OpenCV's CSRT spread its work over cores).")
@@ -109,7 +116,7 @@ Examples:
 def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, ...], json_out: str | None,
           per_frame: bool,
           plot_out: Path | None, jobs: int, scheduler: str | None, starts: int, backwards: bool, every: int,
-          threads: int | None, quiet: bool, speed: bool, overwrite: bool) -> None:
+          passes: int, threads: int | None, quiet: bool, speed: bool, overwrite: bool) -> None:
     """Run trackers over sequences with ground truth and compare them.
 
     Prints one row per sequence and tracker and a mean row per tracker:
@@ -124,11 +131,11 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     """
     jobs_given = click.get_current_context().get_parameter_source("jobs") is not click.core.ParameterSource.DEFAULT
     if speed:
-        if (datasets or per_frame or plot_out is not None or starts != 1 or backwards or every != 1
+        if (datasets or per_frame or plot_out is not None or starts != 1 or backwards or every != 1 or passes != 1
                 or threads is not None or params or jobs_given or scheduler is not None):
             raise UsageError("--speed times trackers on a synthetic video on one core; it takes no --dataset, "
-                             "--per-frame, --plot, --starts, --backwards, --every, --threads, --param, --jobs or "
-                             "--scheduler")
+                             "--per-frame, --plot, --starts, --backwards, --every, --passes, --threads, --param, "
+                             "--jobs or --scheduler")
     check_jobs_or_scheduler(jobs_given, scheduler)
     # Outputs are checked before the work (a benchmark may run for hours), as `lptrack run` checks its own.
     _check_json_out(json_out, overwrite)
@@ -152,13 +159,14 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     tuning = parse_param_options(params, names, [name for name, _ in skipped])
     unread: list[tuple[Path, str]] = []
     sequences = collect_sequences(datasets, unread)
-    if backwards:
-        videos = [s.path.name for s in sequences if s.frame_files is None]
+    for flag, wanted in (("--backwards", backwards), ("--passes", passes > 1)):
+        videos = [s.path.name for s in sequences if s.frame_files is None] if wanted else []
         if videos:
-            raise UsageError(f"--backwards plays image sequences only (OTB, VOT, UAV123 folders), and {videos[0]} is a "
+            raise UsageError(f"{flag} plays image sequences only (OTB, VOT, UAV123 folders), and {videos[0]} is a "
                              "video; give --dataset with such folders")
+    if backwards:
         sequences = [s.backwards() for s in sequences]
-    sequences = [s.every(every) for s in sequences]
+    sequences = [s.every(every).there_and_back(passes) for s in sequences]
     # A video's frame count is its container's, 0 when unknown: then nothing is said before the run.
     short = next((s for s in sequences if s.n_frames == 1), None) if every > 1 else None
     if short is not None:
@@ -195,7 +203,7 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     summary = summarise(results, names)
     table = format_table(results, summary)
     parameters = {"datasets": [str(d) for d in datasets], "trackers": names, "jobs": jobs,
-                  "scheduler": scheduler, "starts": starts, "backwards": backwards, "every": every,
+                  "scheduler": scheduler, "starts": starts, "backwards": backwards, "every": every, "passes": passes,
                   "opencv_threads": threads,
                   "tracker_params": {name: chosen for name, chosen in tuning.items() if chosen},
                   "start_perturbations": [list(p) for p in STARTS[:starts]]}
@@ -207,12 +215,15 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
         table = f"Means over {starts} starts per sequence (--starts; per-start AUCs in --json).\n" + table
         if paired:
             table += "\n" + format_paired(paired)
+    if passes > 1:
+        table += "\n" + format_passes(summary)
     _emit(table, doc, json_out, overwrite)
     if plot_out is not None:
         # Which run a plot shows is not in its curves: say it, as the table's row names do.
         caption = f"{len(sequences)} sequence{'s' if len(sequences) != 1 else ''}"
         caption += " played backwards" if backwards else ""
         caption += f", every {_ordinal(every)} frame" if every > 1 else ""
+        caption += f", {passes} passes there and back" if passes > 1 else ""
         caption += f", means over {starts} starts" if starts > 1 else ""
         plot_curves(summary, plot_out, caption, overwrite=overwrite)
     for r in failed:

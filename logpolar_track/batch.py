@@ -244,7 +244,7 @@ def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None,
             if "\0" in listing:  # find -print0: names exactly as written, NUL after each
                 names = [name for name in listing.split("\0") if name.strip("\n")]
                 if names and not listing.endswith("\0"):  # the line end of an echo or printf after the last name
-                    names[-1] = names[-1].rstrip("\n")
+                    names[-1] = names[-1].rstrip("\r\n")
             else:
                 names = [line.strip() for line in listing.splitlines()]
                 names = [name for name in names if name and not name.startswith("#")]
@@ -286,18 +286,24 @@ def _video_listing(stream) -> str:
     what = "'-' reads the videos' paths from standard input"
     if stream is None:
         raise UsageError(f"{what}, which is closed")
-    head = stream.read(_BINARY_SAMPLE)
-    # Bytes that are not UTF-8 arrive as lone surrogates; a file name has few of them or of control characters,
-    # a video has them everywhere.
-    odd = sum(1 for c in head if ("\udc80" <= c <= "\udcff") or (c < " " and c not in "\t\n\r\0"))
-    if odd > _BINARY_SHARE * len(head):
-        raise UsageError(f"{what}, one per line (or NUL-separated, as find -print0 writes), but it holds binary data "
-                         f"(a video piped in?); give the video's path instead")
-    return head + stream.read()
+    raw = getattr(stream, "buffer", None)
+    # The bytes are decoded here, those that are not UTF-8 as lone surrogates (as the file system's names are):
+    # under a locale whose standard input decodes strictly, one such byte raised a traceback.
+    head = raw.read(_BINARY_SAMPLE) if raw is not None else stream.read(_BINARY_SAMPLE)
+    text = head.decode("utf-8", "surrogateescape") if raw is not None else head
+    # A list of file names has few undecodable bytes or control characters; a video has them everywhere.
+    odd = sum(1 for c in text if ("\udc80" <= c <= "\udcff") or (c < " " and c not in "\t\n\r\0"))
+    if odd > max(_BINARY_SHARE * len(text), _BINARY_MIN):
+        raise UsageError(f"{what}, one per line (or NUL-separated, as find -print0 writes), but what it holds is not "
+                         f"text (a video piped in?); give the video's path instead")
+    if raw is None:
+        return text + stream.read()
+    return (head + raw.read()).decode("utf-8", "surrogateescape")  # whole, so that no character is cut in two
 
 
-#: How much of standard input is looked at, and the share of it that may be bytes no list of paths has.
-_BINARY_SAMPLE, _BINARY_SHARE = 65536, 0.05
+#: How much of standard input is looked at, and the share of it (and a count) that may be bytes no list of paths
+#: has: a short list with one name in Latin-1 is still a list.
+_BINARY_SAMPLE, _BINARY_SHARE, _BINARY_MIN = 65536, 0.05, 16
 
 
 def _is_number(text: str) -> bool:

@@ -246,14 +246,17 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
 def auc_per_pass(sequence: Sequence, frames, iou) -> list[float]:
     """The IoU success AUC of each pass of a sequence played there and back
     (:meth:`~logpolar_track.datasets.Sequence.there_and_back`), from the scored ``frames`` and their ``iou``
-    (:func:`~logpolar_track.evaluate.score_track`'s); NaN for a pass with no frame scored (a run that stopped)."""
-    frames, iou = np.asarray(frames, int), np.nan_to_num(np.asarray(iou, float))
+    (:func:`~logpolar_track.evaluate.score_track`'s), over each pass's frames with ground truth: those a run that
+    stopped never reached count as misses (IoU 0), so that a failure does not read as a better later pass. NaN for
+    a pass without ground truth."""
+    reached = np.zeros(len(sequence.gt.valid))
+    reached[np.asarray(frames, int)] = np.nan_to_num(np.asarray(iou, float))
     m = sequence.pass_frames
     ends = [m + k * (m - 1) for k in range(sequence.passes)]
     out = []
     for begin, end in zip([0] + ends[:-1], ends):
-        chosen = (frames >= begin) & (frames < end)
-        out.append(auc(success_curve(iou[chosen])) if chosen.any() else math.nan)
+        scored = np.flatnonzero(sequence.gt.valid[begin:end]) + begin
+        out.append(auc(success_curve(reached[scored])) if scored.size else math.nan)
     return out
 
 

@@ -208,7 +208,7 @@ class Sequence:
                 "frames": self.n_frames, "scored_frames": int(self.gt.valid[: self.n_frames or None].sum()),
                 "rotated_ground_truth": bool(self.gt.rotated), "start_frame": self.start,
                 "roi": self.roi.to_spec(), "backwards": self.played_backwards, "frame_step": self.frame_step,
-                "first_frame": self.first_frame, "passes": self.passes}
+                "first_frame": self.first_frame, "passes": self.passes, "pass_frames": self.pass_frames}
 
 
 def _image_frames(files, fps: float, first_time_s: float = 0.0):

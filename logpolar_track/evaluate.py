@@ -706,7 +706,8 @@ def read_track_csv(path) -> Track:
         return np.array(values, float)
 
     frame_numbers = numbers("frame")
-    bad_frame = np.flatnonzero(~np.isfinite(frame_numbers) | (frame_numbers != np.round(frame_numbers)))
+    bad_frame = np.flatnonzero(~np.isfinite(frame_numbers) | (frame_numbers != np.round(frame_numbers))
+                               | (frame_numbers < 0))
     if bad_frame.size:
         raise GroundTruthError(f"run CSV '{path}' line {lines[bad_frame[0]]}: frame '{rows[bad_frame[0]]['frame']}' "
                                f"is not a frame index (integer >= 0)")

@@ -407,8 +407,14 @@ def test_standard_input_closed_or_holding_a_video_is_said_so(monkeypatch):
         find_videos(["-"])
     # A video's bytes as the text layer gives them: not UTF-8 (lone surrogates) and control characters.
     header = "\0\0\0\x20ftypisom\0\0\x02\0isomiso2mp41\0\0\x08\x1e" + "\udcb3\udcf6q\x05" * 200
-    with pytest.raises(UsageError, match=r"holds binary data \(a video piped in\?\); give the video's path"):
+    with pytest.raises(UsageError, match=r"what it holds is not text \(a video piped in\?\); give the video's path"):
         find_videos(["-"], stdin=io.StringIO(header))
+    # As bytes under a locale that decodes strictly (it raised UnicodeDecodeError): the same.
+    video = io.TextIOWrapper(io.BytesIO(b"\0\0\0\x20ftypisom" + bytes(range(256)) * 40), errors="strict")
+    with pytest.raises(UsageError, match="what it holds is not text"):
+        find_videos(["-"], stdin=video)
+    names = io.TextIOWrapper(io.BytesIO(b"a.mp4\ncaf\xe9.mp4\r\n"), errors="strict")  # one name not UTF-8
+    assert [v.path.name for v in find_videos(["-"], stdin=names)] == ["a.mp4", "caf\udce9.mp4"]
     # A list of paths with one name that is not UTF-8 is still a list of paths.
     listing = "a.mp4\n" * 30 + "caf\udce9.mp4\n"
     assert len(find_videos(["-"], stdin=io.StringIO(listing))) == 2

@@ -439,17 +439,23 @@ def test_bench_plays_image_sequences_there_and_back_and_scores_each_pass(tmp_pat
 def test_auc_per_pass_splits_the_frames_at_the_turns():
     from logpolar_track.bench import auc_per_pass
 
-    class Played:  # a sequence of 4 frames played in 3 passes: frames 0-3, 4-6, 7-9
-        passes, pass_frames = 3, 4
+    from types import SimpleNamespace
 
-    frames = np.arange(10)
-    iou = np.array([1.0] * 4 + [0.0] * 3 + [0.5] * 3)
     from logpolar_track.evaluate import auc, success_curve
 
-    expected = [auc(success_curve(np.full(n, value))) for n, value in ((4, 1.0), (3, 0.0), (3, 0.5))]
+    # A sequence of 4 frames played in 3 passes: frames 0-3, 4-6, 7-9 (frame 8 without ground truth).
+    valid = np.array([True] * 8 + [False, True])
+    played = SimpleNamespace(passes=3, pass_frames=4, gt=SimpleNamespace(valid=valid))
+    frames = np.flatnonzero(valid)
+    iou = np.array([1.0] * 4 + [0.0] * 3 + [0.5] * 2)
+    expected = [auc(success_curve(np.full(n, value))) for n, value in ((4, 1.0), (3, 0.0), (2, 0.5))]
     assert expected[0] > expected[2] > expected[1] == 0.0
-    assert auc_per_pass(Played, frames, iou) == pytest.approx(expected)
-    assert np.isnan(auc_per_pass(Played, frames[:5], iou[:5])[2])  # a run that stopped in the second pass
+    assert auc_per_pass(played, frames, iou) == pytest.approx(expected)
+    # A run that stopped in the second pass: the frames it never reached are misses, not left out.
+    stopped = auc_per_pass(played, frames[:5], iou[:5])
+    assert stopped == pytest.approx([expected[0], 0.0, 0.0])
+    played.gt.valid = np.array([True] * 7 + [False] * 3)
+    assert np.isnan(auc_per_pass(played, frames[:7], iou[:7])[2])  # a pass without ground truth
 
 
 def test_a_failed_run_is_marked_in_the_mean_it_enters(tmp_path):
@@ -572,7 +578,7 @@ def test_dataset_errors_say_where(tmp_path, dataset):
 
 
 @pytest.mark.parametrize("flag", [["--backwards"], ["--passes", "2"]])
-def test_bench_plays_only_image_sequences_backwards(dataset, flag):
+def test_bench_plays_only_image_sequences_backwards_or_there_and_back(dataset, flag):
     res = _run("bench", "--dataset", dataset, "--trackers", "fixed", *flag)
     assert res.exit_code == 2 and res.stdout == ""
     assert res.stderr.strip().splitlines() == [

@@ -301,7 +301,8 @@ def test_read_gt_csv_and_run_csv(tmp_path):
 @pytest.mark.parametrize("broken, message", [
     ("1,0.04,52,40,22,11,40,1.1", "line 3 has 8 fields; expected 11"),  # cut short, as head -c leaves it
     ("1,0.04,abc,40,22,11,40,1.1,,0.9,tracked", "line 3: cx 'abc' is not a number"),
-    ("1.5,0.04,52,40,22,11,40,1.1,,0.9,tracked", r"line 3: frame '1.5' is not a frame index")])
+    ("1.5,0.04,52,40,22,11,40,1.1,,0.9,tracked", r"line 3: frame '1.5' is not a frame index"),
+    ("-1,0.04,52,40,22,11,40,1.1,,0.9,tracked", r"line 3: frame '-1' is not a frame index \(integer >= 0\)")])
 def test_a_broken_run_csv_is_refused_naming_its_line(tmp_path, broken, message):
     run = tmp_path / "run.csv"
     run.write_text("frame,time_s,cx,cy,a,b,angle_deg,scale,rotation_deg,score,status\n"

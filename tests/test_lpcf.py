@@ -1712,8 +1712,11 @@ def test_shrinking_patches_sample_like_a_full_size_blur(scale, angle_deg):
 @pytest.mark.parametrize("params, fragment", [
     ({"padding": -1}, "padding must be at least 0 and at most 10, got -1"),
     ({"learning_rate": 2}, "learning_rate must be above 0 and at most 1, got 2"),
-    ({"scale_sigma": 0}, "scale_sigma must be above 0, got 0"),
-    ({"iterations": 0}, "iterations must be at least 1, got 0"),
+    ({"scale_sigma": 0}, "scale_sigma must be above 0 and at most 10, got 0"),
+    ({"iterations": 0}, "iterations must be at least 1 and at most 20, got 0"),
+    # Bounded above too: 1e308 overflowed the float32 spectra and every frame was lost, with NumPy's warning.
+    ({"regularisation": 1e308}, "regularisation must be above 0 and at most 1e+06, got 1e+308"),
+    ({"iterations": 10 ** 9}, "iterations must be at least 1 and at most 20, got 1000000000"),
     ({"trust_low": 0.9, "trust_high": 0.9}, "trust_low must be below trust_high"),
     ({"scale_filter_rate": 0}, "scale_filter_rate must be above 0 and at most 1, got 0"),
 ])

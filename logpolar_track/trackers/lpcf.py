@@ -372,18 +372,20 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.colour_weight = float(colour_weight)
         self.scale_filter, self.scale_filter_rate = bool(scale_filter), float(scale_filter_rate)
         self.long_term = bool(long_term)
-        # Ranges: (low, high), inclusive, None unbounded; a low of 0.0 in _POSITIVE is exclusive.
+        # Ranges: (low, high), inclusive; a low of 0.0 in _POSITIVE is exclusive. Every range is bounded: far
+        # beyond these the float32 spectra overflow (regularisation=1e308 lost every frame with NumPy's warning)
+        # or a frame's work grows without end (iterations), and nothing useful lies there.
         check_ranges(self, {
             "padding": (0.0, 10.0), "patch_samples": (16, 1024), "learning_rate": (0.0, 1.0),
             "lp_learning_rate": (0.0, 1.0), "n_rho": (8, 512), "n_theta": (8, 1024), "lost_threshold": (0.0, 1.0),
-            "psr_learn": (0.0, None), "lp_min_height": (0.0, 1.0), "max_scale_step": (0.0, 1.0),
-            "max_rotation_step": (0.0, None), "regularisation": (0.0, None), "label_sigma": (0.0, None),
-            "velocity_damping": (0.0, 1.0), "window_power": (0.0, None), "scale_sigma": (0.0, None),
-            "rotation_sigma": (0.0, None), "anchor_weight": (0.0, 1.0), "iterations": (1, None),
-            "level_rate": (0.0, 1.0), "redetect_after": (1, None), "trust_low": (0.0, 1.0), "trust_high": (0.0, 1.0),
-            "learn_every": (1, None), "lp_extent": (0.5, 10.0), "drop_ratio": (0.0, 1.0), "refine_steps": (0, 10),
-            "subspace_components": (0, 12), "refine_max_distance": (0.0, 1.0), "colour_weight": (0.0, 1.0),
-            "scale_filter_rate": (0.0, 1.0)}, positive=_POSITIVE)
+            "psr_learn": (0.0, 1000.0), "lp_min_height": (0.0, 1.0), "max_scale_step": (0.0, 1.0),
+            "max_rotation_step": (0.0, 180.0), "regularisation": (0.0, 1e6), "label_sigma": (0.0, 10.0),
+            "velocity_damping": (0.0, 1.0), "window_power": (0.0, 100.0), "scale_sigma": (0.0, 10.0),
+            "rotation_sigma": (0.0, 360.0), "anchor_weight": (0.0, 1.0), "iterations": (1, 20),
+            "level_rate": (0.0, 1.0), "redetect_after": (1, 10 ** 6), "trust_low": (0.0, 1.0),
+            "trust_high": (0.0, 1.0), "learn_every": (1, 10 ** 6), "lp_extent": (0.5, 10.0), "drop_ratio": (0.0, 1.0),
+            "refine_steps": (0, 10), "subspace_components": (0, 12), "refine_max_distance": (0.0, 1.0),
+            "colour_weight": (0.0, 1.0), "scale_filter_rate": (0.0, 1.0)}, positive=_POSITIVE)
         if self.trust_low >= self.trust_high:
             raise UsageError(f"{self.name}: trust_low must be below trust_high, got {self.trust_low} and "
                              f"{self.trust_high}")

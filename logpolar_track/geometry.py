@@ -23,6 +23,8 @@ from .errors import RoiError, counted
 _INF = math.inf
 
 ROI_SYNTAX = "'cx,cy,r' (circle) or 'cx,cy,a,b,angle' (ellipse; pixels, angle in degrees counter-clockwise)"
+#: Smallest semi-axis (pixels) of a ROI that is tracked (:func:`check_roi_fits`); the parser accepts any above 0.
+MIN_TRACKED_SEMI_AXIS = 2.0
 
 
 @dataclass(frozen=True)
@@ -225,11 +227,13 @@ def parse_roi(spec: str) -> Ellipse:
     if len(values) == 3:
         cx, cy, r = values
         if r <= 0:
-            raise RoiError(f"ROI '{spec}': radius must be > 0 pixels, got {_fmt(r)}")
+            raise RoiError(f"ROI '{spec}': radius must be > 0 pixels ({_fmt(MIN_TRACKED_SEMI_AXIS)} or more to track), "
+                           f"got {_fmt(r)}")
         return Ellipse.circle(cx, cy, r)
     cx, cy, a, b, angle = values
     if a <= 0 or b <= 0:
-        raise RoiError(f"ROI '{spec}': semi-axes must be > 0 pixels, got a={_fmt(a)}, b={_fmt(b)}")
+        raise RoiError(f"ROI '{spec}': semi-axes must be > 0 pixels ({_fmt(MIN_TRACKED_SEMI_AXIS)} or more to track), "
+                       f"got a={_fmt(a)}, b={_fmt(b)}")
     # Any angle names a direction; wrapped here, a huge one (1e308) cannot swamp the rotation added to it later.
     return Ellipse(cx, cy, a, b, wrap_degrees(angle))
 
@@ -281,7 +285,7 @@ def _looks_like_rotated_rect(roi) -> bool:
 
 
 def check_roi_fits(roi: Ellipse, width: int, height: int, *, source: str | None = None,
-                   min_inside: float = 0.5, min_radius: float = 2.0) -> None:
+                   min_inside: float = 0.5, min_radius: float = MIN_TRACKED_SEMI_AXIS) -> None:
     """Raise :class:`RoiError` unless ``roi`` is usable on a ``width`` x ``height`` frame.
 
     A ROI may hang over the border (trackers pad the frame), but its centre must lie in the frame (within its

@@ -30,9 +30,9 @@ def test_parse_roi_accepts(spec, expected):
     ("1_40,120,30", "not a list of numbers"),
     ("1,2,nan", "non-finite"),
     ("1,2,inf", "non-finite"),
-    ("10,10,0", "radius must be > 0"),
+    ("10,10,0", "radius must be > 0 pixels (2 or more to track), got 0"),
     ("10,10,-5", "radius must be > 0"),
-    ("10,10,5,0,30", "semi-axes must be > 0"),
+    ("10,10,5,0,30", "semi-axes must be > 0 pixels (2 or more to track), got a=5, b=0"),
 ], ids=["two", "empty", "four", "letters", "underscore", "nan", "inf", "zero-r", "negative-r", "zero-b"])
 def test_parse_roi_rejects_with_message(spec, fragment):
     with pytest.raises(RoiError) as err:

@@ -43,8 +43,8 @@ from .evaluate import (GroundTruthError, Track, read_data_file, rotation_errors,
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
 from .results import COLUMNS, FrameResult, off_contract
 from .trackers.base import TrackState
-from .video import (VideoReader, check_output_path, guess_image_sequence, move_into_place, opencv_path,
-                    temporary_path, video_stem)
+from .video import (VideoReader, check_output_path, guess_image_sequence, move_into_place, temporary_path,
+                    video_stem)
 
 #: BGR colour of the grid lines drawn by :func:`draw_grid` (cyan: rare in natural images, legible on both
 #: dark and light backgrounds).
@@ -298,11 +298,14 @@ def write_png(path, image: np.ndarray, *, overwrite: bool = False, what: str = "
     """
     check_image_suffix(path, (".png",), what)
     path = check_output_path(path, overwrite=overwrite, what=what)
-    opencv_path(path, what, OutputError)  # its temporary name shares the name's stem
+    # Encoded in memory and written by Python: a full disk is then one OSError ("No space left on device"),
+    # where cv2.imwrite let libpng print its own line first, and any name the file system takes will do.
+    ok, encoded = cv2.imencode(".png", image)
+    if not ok:
+        raise OutputError(f"cannot write {what} '{path}': PNG encoding failed")
     temp = temporary_path(path)
     try:
-        if not cv2.imwrite(str(temp), image):
-            raise OutputError(f"cannot write {what} '{path}': PNG encoding failed")
+        temp.write_bytes(encoded.tobytes())
         move_into_place(temp, path, overwrite=overwrite, what=what)
     except OSError as exc:
         raise OutputError(f"cannot write {what} '{path}': {exc.strerror or exc}") from None
@@ -455,12 +458,13 @@ def roi_from_points(points, *, round_tolerance: float = ROUND_TOLERANCE) -> Elli
     Raises
     ------
     RoiError
-        An odd count of numbers, fewer than 3 points, all points on a line, or no ellipse fits.
+        An odd count of numbers, fewer than 3 distinct points, all points on a line, or no ellipse fits.
 
     Notes
     -----
-    3 or 4 points determine a circle but not an ellipse (5 parameters): they give the least-squares circle
-    through them (Kasa's algebraic fit). 5 or more give OpenCV's direct least-squares ellipse fit
+    Points given more than once count once. 3 or 4 points determine a circle but not an ellipse (5 parameters):
+    they give the least-squares circle through them (Kasa's algebraic fit). 5 or more give OpenCV's direct
+    least-squares ellipse fit
     (``cv2.fitEllipseDirect``, Fitzgibbon, Pilu and Fisher, TPAMI 1999, which always returns an ellipse).
     OpenCV reports the rotated rectangle's angle in image coordinates (y down), i.e. clockwise on screen, and
     which side is "width" has changed between versions; the orientation is therefore taken from whichever
@@ -472,11 +476,15 @@ def roi_from_points(points, *, round_tolerance: float = ROUND_TOLERANCE) -> Elli
         [float(v) for v in np.asarray(points, float).ravel()]
     if len(values) % 2:
         raise RoiError(f"points give {len(values)} numbers; expected pairs x1,y1,x2,y2,... (pixels)")
-    pts = np.asarray(values, float).reshape(-1, 2)
+    given = np.asarray(values, float).reshape(-1, 2)
+    # A point given twice adds nothing to the outline: 5 points of which 3 differ determine a circle, not the
+    # arbitrary ellipse through 3 points that the ellipse fit returned.
+    pts = np.unique(given, axis=0)
     n = len(pts)
     if n < 3:
-        raise RoiError(f"{n} point(s) cannot define an outline: give at least 3 points on it (3-4 fit a "
-                       f"circle, 5 or more an ellipse)")
+        repeated = "" if n == len(given) else f" ({len(given)} given, some repeated)"
+        raise RoiError(f"{counted(n, 'distinct point')}{repeated} cannot define an outline: give at least 3 "
+                       f"points on it (3-4 fit a circle, 5 or more an ellipse)")
     centred = pts - pts.mean(axis=0)
     sv = np.linalg.svd(centred, compute_uv=False)
     if sv[1] <= 1e-6 * max(sv[0], 1e-12):

@@ -7,7 +7,9 @@ points on known ellipses; plot and sheet run on a tiny ``lptrack run --tracker d
 from __future__ import annotations
 
 import csv
+import errno
 import math
+import re
 import shutil
 import sys
 from pathlib import Path
@@ -114,6 +116,20 @@ def test_frame_command_writes_the_exact_frame(tiny_video, tmp_path, monkeypatch)
     assert image.shape == expected.shape
     # Only the size caption in the bottom-right corner differs (PNG is lossless).
     assert np.array_equal(image[:96], expected[:96])
+
+
+def test_frame_on_a_full_disk_is_one_line_and_leaves_nothing(tiny_video, tmp_path, monkeypatch):
+    """cv2.imwrite let libpng print its own line ("libpng error: Write Error") before lptrack's; the PNG is now
+    encoded in memory and written by Python, whose error is the one line."""
+    def full_disk(self, data):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(Path, "write_bytes", full_disk)
+    out = tmp_path / "out"
+    out.mkdir()
+    line = one_error_line(invoke("frame", tiny_video.path, "-o", out / "f.png"), 1)
+    assert line == f"lptrack: error: cannot write output image '{out / 'f.png'}': No space left on device"
+    assert list(out.iterdir()) == []
 
 
 def test_frame_command_refuses_to_overwrite_and_bad_indexes(tiny_video, tmp_path):
@@ -230,6 +246,17 @@ def test_roi_from_few_points_is_a_circle_and_too_few_is_an_error():
         roi_from_points("1,2,3,4,5")
     with pytest.raises(RoiError, match="straight line"):
         roi_from_points("0,0,1,1,2,2,3,3,4,4")
+
+
+def test_roi_from_points_counts_a_repeated_point_once():
+    """5 points of which 3 differ determine a circle, not an ellipse; 4 of which 2 differ, nothing."""
+    r, cx, cy = 25.0, 70.0, 50.0
+    t = np.array([0.3, 1.9, 4.0])
+    pts = np.column_stack([cx + r * np.cos(t), cy - r * np.sin(t)])
+    e = roi_from_points(np.vstack([pts, pts[:2]]))
+    assert e.is_circle and math.dist(e.centre, (cx, cy)) < 1e-6 and e.a == pytest.approx(r)
+    with pytest.raises(RoiError, match=re.escape("2 distinct points (4 given, some repeated) cannot define")):
+        roi_from_points("10,10,20,20,10,10,20,20")
 
 
 def test_roi_command_prints_a_spec_checked_against_the_frame(tiny_video):

@@ -423,8 +423,8 @@ def _varying_rate(label: str, first: int, fps: float, start: int, video: bool) -
 
 
 def _truncation(label: str, frames: int, expected: int) -> str:
-    return (f"{label}: ended after {frames} of the {expected} frames its container announces (truncated?); "
-            f"its outputs hold those {frames}")
+    return (f"{label}: ended after {frames} of the {expected} frames its container announces (cut short or "
+            f"damaged?); its outputs hold those {frames}")
 
 
 def _stderr_is_terminal() -> bool:

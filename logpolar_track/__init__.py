@@ -5,14 +5,8 @@ frame) and :func:`run_video` (what ``lptrack run`` does: annotated video and CSV
 """
 
 import importlib
-from importlib.metadata import PackageNotFoundError, version
 
 from .errors import InputError, LptrackError, OutputError, RoiError, UsageError, VideoError
-
-try:
-    __version__ = version("logpolar-track")
-except PackageNotFoundError:  # running from a source tree that was not installed
-    __version__ = "0+unknown"
 
 #: Public names imported on first use (PEP 562): ``import logpolar_track`` (and so the ``lptrack`` script, see
 #: :mod:`logpolar_track.__main__`) does not wait for NumPy and OpenCV, and a Ctrl-C during those imports can be
@@ -27,6 +21,16 @@ __all__ = ["Ellipse", "parse_roi", "Tracker", "TrackState", "create_tracker", "t
 
 
 def __getattr__(name: str):
+    if name == "__version__":
+        # Looked up on first use too: importlib.metadata takes 30 ms to import, before the script can catch Ctrl-C.
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            value = version("logpolar-track")
+        except PackageNotFoundError:  # running from a source tree that was not installed
+            value = "0+unknown"
+        globals()[name] = value
+        return value
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -109,7 +109,8 @@ class VideoOutcome:
     is the frame rate assumed for a source that reports none (an image sequence, when no ``fps`` was given), else
     None. ``timestamps_from`` is, for a variable frame rate, ``(first frame timed by its timestamp, fps, start
     frame)`` (:attr:`RunSummary.timestamps_from <logpolar_track.pipeline.RunSummary.timestamps_from>`), else None.
-    ``roi_flat``: the ROI held a flat region on the start frame (:attr:`RunSummary.roi_flat`).
+    ``roi_flat``: the ROI held a flat region on the start frame (:attr:`RunSummary.roi_flat`). ``undecodable``:
+    stretches of frames that could not be decoded, ``(first frame, count)`` (:attr:`RunSummary.undecodable`).
     """
 
     label: str
@@ -124,6 +125,7 @@ class VideoOutcome:
     fps_assumed: float | None = None
     timestamps_from: tuple[int, float, int] | None = None
     roi_flat: bool = False
+    undecodable: tuple[tuple[int, int], ...] = ()
 
 
 @dataclass
@@ -647,7 +649,7 @@ def run_job(job: VideoJob, report: Callable[[int], None] | None = None) -> Video
                         fps_assumed=summary.video_fps if summary.video_fps_guessed else None,
                         timestamps_from=(None if summary.timestamps_from is None
                                          else (summary.timestamps_from, summary.video_fps, summary.start_frame)),
-                        roi_flat=summary.roi_flat)
+                        roi_flat=summary.roi_flat, undecodable=summary.undecodable)
 
 
 def remove_temporary_outputs(job: VideoJob, pid: int) -> None:

@@ -100,9 +100,13 @@ class Frame:
 
 
 def count_frames(path) -> int:
-    """Number of frames of ``path``, by decoding it completely (exact; container counts can be wrong)."""
+    """Number of frames of ``path``, by decoding it completely (exact; container counts can be wrong). Frames that
+    could not be decoded in a damaged stretch count, as they keep their numbers (:class:`VideoReader`)."""
     with VideoReader(path) as reader:
-        return sum(1 for _ in reader)
+        last = -1
+        for last, _, _ in reader:
+            pass
+        return last + 1
 
 
 def read_frame(path, index: int | None = None, *, time_s: float | None = None, fps: float | None = None) -> Frame:

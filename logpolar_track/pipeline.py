@@ -275,7 +275,12 @@ class RunSummary:
         CSV path, ``'-'`` for stdout, or None.
     expected_frames : int
         Frames from the start frame to the end (or ``max_frames`` if fewer) as the container announces them
-        (0 when it does not say). Fewer ``frames`` than this means the video ended early (truncated file).
+        (0 when it does not say). Fewer ``frames`` and ``undecodable_frames`` than this means the video ended
+        early (truncated file).
+    undecodable : tuple of (int, int)
+        Stretches of frames that could not be decoded (a file damaged there), as ``(first frame, count)``: they
+        have no row, and tracking went on after them (:attr:`VideoReader.undecodable
+        <logpolar_track.video.VideoReader.undecodable>`).
     timestamps_from : int or None
         A variable frame rate: the first frame whose ``time_s`` is the stream's timestamp rather than ``frame /
         fps`` (:meth:`~logpolar_track.video.VideoReader.time_of`); None for a constant one.
@@ -301,11 +306,17 @@ class RunSummary:
     expected_frames: int = 0
     timestamps_from: int | None = None
     roi_flat: bool = False
+    undecodable: tuple[tuple[int, int], ...] = ()
+
+    @property
+    def undecodable_frames(self) -> int:
+        """How many frames could not be decoded (see ``undecodable``)."""
+        return sum(count for _, count in self.undecodable)
 
     @property
     def truncated(self) -> bool:
-        """The video delivered fewer frames than its container announces (e.g. a file cut short)."""
-        return 0 < self.frames < self.expected_frames
+        """The video ended before the frames its container announces (e.g. a file cut short)."""
+        return 0 < self.frames + self.undecodable_frames < self.expected_frames
 
 
 def _check_max_frames(max_frames: int | None) -> None:
@@ -474,4 +485,4 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
         video_fps=reader.fps, video_fps_guessed=reader.fps_guessed, width=reader.width, height=reader.height,
         video_out=written, fourcc=video_writer.fourcc if video_writer is not None else None,
         csv_out=None if csv_writer is None else csv_writer.target, expected_frames=announced,
-        timestamps_from=reader.timestamps_from, roi_flat=roi_flat)
+        timestamps_from=reader.timestamps_from, roi_flat=roi_flat, undecodable=tuple(reader.undecodable))

@@ -238,8 +238,9 @@ class _ImageSequenceCapture:
         return True
 
     def read(self) -> tuple[bool, np.ndarray | None]:
-        if not self.grab():
-            return False, None
+        return self.retrieve() if self.grab() else (False, None)
+
+    def retrieve(self) -> tuple[bool, np.ndarray | None]:
         file = self._files[self._next - 1]
         frame = cv2.imread(opencv_path(file, "image"), cv2.IMREAD_COLOR)
         if frame is None:
@@ -324,13 +325,18 @@ class VideoReader:
         while every frame is within half a frame of ``index / fps`` (constant frame rate). See :meth:`time_of`.
     frame_count : int
         Frame count the container reports; may be approximate, and 0 when unknown.
+    undecodable : list of (int, int)
+        Stretches of frames that could not be decoded (a damaged file), as ``(first frame, count)``, once
+        iteration has passed them. They keep their numbers: the frames after such a stretch are delivered with
+        theirs, so an index is skipped, as a player shows the frames before and after the damage.
     width, height : int
         Frame size in pixels, from the first decoded frame.
 
     Raises
     ------
     VideoError
-        If the file is missing, not a video, contains no frames, or ``start_frame`` lies past its end.
+        If the file is missing, not a video, contains no frames, or ``start_frame`` lies past its end or cannot be
+        decoded.
 
     Notes
     -----
@@ -366,22 +372,32 @@ class VideoReader:
         self._stamp_offset: float | None = None
         count = self._cap.get(cv2.CAP_PROP_FRAME_COUNT)
         self.frame_count = int(count) if math.isfinite(count) and count > 0 else 0
+        self.undecodable: list[tuple[int, int]] = []
         # Skip to the start frame by decoding: exact, unlike CAP_PROP_POS_FRAMES on inter-coded streams.
-        for skipped in range(self.start_frame):
-            if not self._cap.grab():
+        position = 0  # the number of the next frame
+        while True:
+            ok, failed = self._grab_next(position)
+            if not ok:
                 self._cap.release()
-                if skipped == 0:
-                    raise VideoError(f"video '{self.path}' contains no frames")
-                raise _past_the_end(self.start_frame, self.path, skipped)
-            if skipped == 0 and self._stamped:
-                self._stamp_offset = self._stamp()  # frame 0's stamp: times count from it (see time_of)
-        ok, first = self._cap.read()
+                if position == 0:
+                    raise VideoError(f"video '{self.path}' contains no frames (empty or unreadable video)")
+                raise _past_the_end(self.start_frame, self.path, position)
+            number = position + failed
+            if number >= self.start_frame:
+                break
+            if self._stamped and self._stamp_offset is None:
+                # The first frame's stamp, less its time: times count from frame 0's (see time_of, which takes
+                # it from the start frame when no frame is skipped).
+                self._stamp_offset = self._stamp() - number / self.fps
+            position = number + 1
+        ok, first = self._cap.retrieve() if number == self.start_frame else (False, None)
         self._first_stamp = self._stamp()
         if not ok or first is None or first.size == 0:
             self._cap.release()
-            if self.start_frame == 0:
-                raise VideoError(f"video '{self.path}' contains no frames (empty or unreadable video)")
-            raise _past_the_end(self.start_frame, self.path, self.start_frame)
+            where = ("there" if number == self.start_frame else f"at frame {position}" if number == position + 1
+                     else f"at frames {position}-{number - 1}")
+            raise VideoError(f"frame {self.start_frame} of '{self.path}' cannot be decoded (the file is damaged "
+                             f"{where}); start at another frame")
         self.first_frame: np.ndarray = first
         self.height, self.width = first.shape[:2]
         # The slots bound the frames decoded ahead, counted from the start of their decoding: a bounded queue
@@ -430,6 +446,19 @@ class VideoReader:
         self._last_time = time_s
         return time_s
 
+    def _grab_next(self, number: int) -> tuple[bool, int]:
+        """Grab frame ``number``, going on past frames that fail to decode while the container announces more:
+        ``(ok, failed)``, ``failed`` the frames before the one grabbed that could not be decoded. FFmpeg's decoder
+        resumes after a damaged stretch, as players do, and each failed grab is one frame (the stamps of the frames
+        after a gap say so), so frames keep their numbers. Up to :data:`MAX_UNDECODABLE_RUN` failures in a row,
+        beyond which the video ends there (cut short)."""
+        failed = 0
+        while not self._cap.grab():  # releases the GIL while FFmpeg decodes
+            failed += 1
+            if not (number + failed < self.frame_count and failed < MAX_UNDECODABLE_RUN):
+                return False, failed
+        return True, failed
+
     def _stamp(self) -> float | None:
         """The last decoded frame's timestamp in seconds, if the stream's timestamps are read."""
         return self._cap.get(cv2.CAP_PROP_POS_MSEC) / 1000.0 if self._stamped else None
@@ -459,9 +488,11 @@ class VideoReader:
                 return
             if isinstance(item, BaseException):
                 raise VideoError(f"reading '{self.path}' failed after frame {index}: {item}") from item
-            index += 1
-            frame, stamp = item
+            frame, stamp, failed = item
             del item
+            if failed:
+                self.undecodable.append((index + 1, failed))
+            index += 1 + failed
             yield index, self.time_of(index, stamp), frame
 
     def _decode(self) -> None:
@@ -469,13 +500,17 @@ class VideoReader:
 
         Once started, the thread owns the capture and releases it as it ends, so that a :meth:`close` whose
         wait is interrupted (Ctrl-C) can neither release it mid-read nor leave it open."""
+        number = self.start_frame + 1
         try:
             while self._free_slot():
-                ok, frame = self._cap.read()  # releases the GIL while FFmpeg decodes
+                ok, failed = self._grab_next(number)
+                if ok:
+                    ok, frame = self._cap.retrieve()
                 if not ok or frame is None:
                     break
-                self._queue.put((frame, self._stamp()))
+                self._queue.put((frame, self._stamp(), failed))
                 del frame  # the queue holds it; the consumer's taking it frees the slot
+                number += failed + 1
             else:  # stopped by close(): nobody waits for the end
                 return
         except Exception as exc:  # noqa: BLE001 - handed to the consumer, which raises it as a VideoError
@@ -525,6 +560,11 @@ class VideoReader:
                 self._queue.get_nowait()
             except queue.Empty:
                 break
+
+
+#: Frames in a row that fail to decode after which a video is taken to end there (cut short, though its container
+#: announces more) rather than to be damaged: a failed read at the end of a file takes 10-20 us.
+MAX_UNDECODABLE_RUN = 250
 
 
 def _past_the_end(start_frame: int, path: Path, n_frames: int) -> FrameRangeError:

@@ -58,6 +58,16 @@ def write_video(path: Path, frames, fps: float = 30.0, fourcc: str | None = None
     return path
 
 
+def damage_middle(path: Path) -> Path:
+    """Overwrite 1,500 bytes in the middle of video ``path`` with seeded noise, as a failing copy or card does: on a
+    60-frame clip of :func:`_make_video`, a stretch of frames FFmpeg cannot decode, after which it decodes again."""
+    data = bytearray(path.read_bytes())
+    at = len(data) // 2
+    data[at:at + 1500] = np.random.default_rng(0).integers(0, 256, 1500, dtype=np.uint8).tobytes()
+    path.write_bytes(bytes(data))
+    return path
+
+
 def decode_all(path: Path) -> list[np.ndarray]:
     """Every frame of ``path``, read from the start with a plain ``cv2.VideoCapture`` (the reference for readers)."""
     cap = cv2.VideoCapture(str(path))

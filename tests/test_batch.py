@@ -21,7 +21,7 @@ import cv2
 import pytest
 from click.testing import CliRunner
 
-from conftest import _make_video
+from conftest import _make_video, damage_middle
 from logpolar_track.batch import (BatchProgress, VideoInput, VideoOutcome, announced_job_frames, data_frame_span,
                                   find_videos, plan_batch, read_roi_file, run_batch)
 from logpolar_track.cli import main
@@ -891,3 +891,19 @@ def test_opencv_threads_sets_and_restores_after_the_last_overlapping_block(two_o
         with opencv_threads(1):
             raise KeyError("a failed run restores the setting too")
     assert cv2.getNumThreads() == before
+
+
+def test_a_batch_says_which_frames_of_a_damaged_video_have_no_row(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "cams").mkdir()
+    _make_video(tmp_path / "cams", "ok.mp4", n_frames=20, seed=1)
+    damage_middle(_make_video(tmp_path / "cams", "hit.mp4", n_frames=60, seed=1).path)
+    result = invoke("cams", "--out-dir", "out", "--no-video", "--jobs", "1")
+    assert result.exit_code == 0, result.stderr
+    rows = csv_rows(tmp_path / "out" / "hit.lptrack.csv")
+    frames = [int(r["frame"]) for r in rows]
+    gap = sorted(set(range(60)) - set(frames))
+    assert frames[-1] == 59 and 1 <= len(gap) <= 10 and gap == list(range(gap[0], gap[-1] + 1))
+    assert (f"lptrack: warning: cams/hit.mp4: {len(gap)} frames could not be decoded (the file is damaged there) and "
+            f"have no row: {gap[0]}-{gap[-1]}; tracking went on after them") in result.stderr.splitlines()
+    assert "ended after" not in result.stderr

@@ -21,7 +21,7 @@ import cv2
 import pytest
 from click.testing import CliRunner
 
-from conftest import count_frames
+from conftest import count_frames, damage_middle
 from logpolar_track import pipeline
 from logpolar_track.cli import main
 from logpolar_track.errors import LptrackError, RoiError
@@ -29,6 +29,7 @@ from logpolar_track.geometry import Ellipse
 from logpolar_track.pipeline import read_roi_sidecar, run_video, track_video
 from logpolar_track.results import COLUMNS
 from logpolar_track.trackers import Tracker, TrackState, tracker_names
+from logpolar_track.video import VideoReader
 
 HEADER = "frame,time_s,cx,cy,a,b,angle_deg,scale,rotation_deg,score,status"
 
@@ -917,3 +918,22 @@ def test_a_frame_at_a_time_of_a_varying_rate_is_found_by_its_timestamps(tiny_vid
     assert frame.index == 11 and frame.time_s == pytest.approx(0.7)
     assert read_frame(tiny_video.path, time_s=0.45).index == 9  # 0.3 s is nearer than frame 10's 0.667 s
     assert read_frame(tiny_video.path, 11).time_s == pytest.approx(0.7)
+
+
+def test_a_damaged_stretch_is_passed_over_and_said_which_frames_have_no_row(make_video, tmp_path, workdir):
+    """A video damaged in the middle ended the run there, with "truncated?"; the rest of it is tracked now."""
+    clip = make_video(tmp_path, "clip.mp4", n_frames=60)
+    damage_middle(clip.path)
+    with VideoReader(clip.path) as reader:
+        for _ in reader:
+            pass
+    (first, count), = reader.undecodable
+    result = invoke(clip.path, "--no-video", "--csv", "-")
+    assert result.exit_code == 0, result.stderr
+    rows = read_rows(result.stdout)
+    assert [int(r["frame"]) for r in rows] == [i for i in range(60) if not first <= i < first + count]
+    assert float(rows[-1]["time_s"]) == pytest.approx(59 / clip.fps, abs=1e-6)
+    lines = result.stderr.splitlines()
+    assert lines[0] == (f"lptrack: warning: clip.mp4: {count} frames could not be decoded (the file is damaged there) "
+                        f"and have no row: {first}-{first + count - 1}; tracking went on after them")
+    assert len(lines) == 2 and lines[1].startswith(f"lptrack: clip.mp4: {60 - count} frames (")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gc
 import os
+import re
 import shutil
 import sys
 import signal
@@ -16,7 +17,7 @@ import cv2
 import numpy as np
 import pytest
 
-from conftest import count_frames, decode_all, write_video
+from conftest import count_frames, damage_middle, decode_all, write_video
 from logpolar_track import video as video_module
 from logpolar_track.errors import OutputError, VideoError
 from logpolar_track.video import FALLBACK_FPS, VideoReader, VideoWriter, temporary_path
@@ -52,6 +53,47 @@ def test_start_frame_past_end_says_how_many_frames(tiny_video):
         VideoReader(tiny_video.path, start_frame=20)
     with pytest.raises(VideoError, match=r"which has 20 frames; give a start frame from 0 to 19"):
         VideoReader(tiny_video.path, start_frame=25)
+
+
+def test_reading_goes_on_past_frames_that_cannot_be_decoded(make_video, tmp_path):
+    """A file damaged in the middle (a failing copy or card) ended the frames there, as if cut short. FFmpeg's
+    decoder resumes after the damage, as players do, and the frames after it keep their numbers."""
+    clip = make_video(tmp_path, "clip.mp4", n_frames=60)
+    intact = decode_all(clip.path)
+    damage_middle(clip.path)
+    with VideoReader(clip.path) as reader:
+        items = list(reader)
+    missing = {first + k for first, count in reader.undecodable for k in range(count)}
+    assert 1 <= len(missing) <= 10 and max(missing) < 59
+    assert [i for i, _, _ in items] == [i for i in range(60) if i not in missing]
+    # The numbers are the stream's: every frame's timestamp is its number / fps. Numbered in decoding order, the
+    # frames after the gap were stamped later than that, and the stamps took over (timestamps_from).
+    assert reader.timestamps_from is None
+    assert all(t == pytest.approx(i / clip.fps) for i, t, _ in items)
+    # Away from the damage they are the intact file's frames: before the frame whose data it reached, and from the
+    # next key frame on (OpenCV's mp4v writes one every 12 frames); between, FFmpeg conceals what it lacks.
+    away = [i for i, _, _ in items if i < min(missing) - 1 or i > max(missing) + 12]
+    assert len(away) >= 30
+    assert all(np.array_equal(frame, intact[i]) for i, _, frame in items if i in away)
+
+
+def test_a_start_frame_that_cannot_be_decoded_is_refused_and_the_next_one_is_exact(make_video, tmp_path):
+    clip = make_video(tmp_path, "clip.mp4", n_frames=60)
+    damage_middle(clip.path)
+    with VideoReader(clip.path) as reader:
+        for _ in reader:
+            pass
+    first, count = reader.undecodable[0]
+    last = first + count - 1
+    where = f"frame {first}" if count == 1 else f"frames {first}-{last}"
+    message = (f"frame {last} of '{clip.path}' cannot be decoded (the file is damaged at {where}); "
+               f"start at another frame")
+    with pytest.raises(VideoError, match=re.escape(message)):
+        VideoReader(clip.path, start_frame=last)
+    with VideoReader(clip.path, start_frame=last + 1) as reader:
+        items = list(reader)
+    assert items[0][:2] == (last + 1, pytest.approx((last + 1) / clip.fps))
+    assert [i for i, _, _ in items] == list(range(last + 1, 60))
 
 
 def test_close_early_stops_the_decoding_thread(tiny_video):
@@ -120,10 +162,13 @@ def test_reader_decodes_at_most_read_ahead_frames_ahead_and_keeps_none(tiny_vide
     capture = reader._cap
 
     class CountingCapture:
-        def read(self):
-            ok, frame = capture.read()
+        def grab(self):
+            ok = capture.grab()
             decoded.append(ok)
-            return ok, frame
+            return ok
+
+        def retrieve(self):
+            return capture.retrieve()
 
         def get(self, prop):
             return capture.get(prop)

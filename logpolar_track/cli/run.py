@@ -18,7 +18,7 @@ import click
 
 from ..batch import (VIDEO_EXTENSIONS, BatchProgress, BatchSummary, find_videos, mirrored_output_base,
                      outputs_complete, plan_batch, read_roi_file, run_batch)
-from ..errors import OutputError, UsageError
+from ..errors import OutputError, UsageError, counted
 from ..executor import default_jobs
 from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, default_outputs, roi_sidecar_paths,
                         run_video)
@@ -383,9 +383,11 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
     if summary.video_fps_guessed:
         click.echo(f"lptrack: warning: {_rate_assumed(str(video), summary.video_fps, summary.video_out is not None)}",
                    err=True)
+    if summary.undecodable:
+        click.echo(f"lptrack: warning: {_undecodable(label, summary.undecodable)}", err=True)
     if summary.truncated:
-        click.echo(f"lptrack: warning: {_truncation(label, summary.frames, summary.expected_frames)}",
-                   err=True)
+        reached = summary.frames + summary.undecodable_frames
+        click.echo(f"lptrack: warning: {_truncation(label, reached, summary.expected_frames)}", err=True)
     if summary.roi_flat:
         click.echo(f"lptrack: warning: {_flat_roi(label)}", err=True)
     if summary.timestamps_from is not None:
@@ -420,6 +422,15 @@ def _varying_rate(label: str, first: int, fps: float, start: int, video: bool) -
         return f"{label}'s frame rate varies: time_s follows its timestamps, not frame / {fps:g} fps{played}"
     return (f"{label}'s frame rate varies: time_s follows its timestamps from frame {first} on (before, frame / "
             f"{fps:g} fps was within half a frame of them){played}")
+
+
+def _undecodable(label: str, stretches) -> str:
+    total = sum(count for _, count in stretches)
+    shown = [str(first) if count == 1 else f"{first}-{first + count - 1}" for first, count in stretches[:5]]
+    more = ", ..." if len(stretches) > 5 else ""
+    return (f"{label}: {counted(total, 'frame')} could not be decoded (the file is damaged there) and "
+            f"{'has' if total == 1 else 'have'} no row: {', '.join(shown)}{more}; tracking went on after "
+            f"{'it' if total == 1 else 'them'}")
 
 
 def _truncation(label: str, frames: int, expected: int) -> str:
@@ -494,8 +505,11 @@ def _report(summary: BatchSummary, *, quiet: bool, video: bool) -> None:
         for outcome in summary.outcomes:
             if outcome.fps_assumed is not None:
                 click.echo(f"lptrack: warning: {_rate_assumed(outcome.label, outcome.fps_assumed, video)}", err=True)
+            if outcome.undecodable:
+                click.echo(f"lptrack: warning: {_undecodable(outcome.label, outcome.undecodable)}", err=True)
             if outcome.truncated:
-                click.echo(f"lptrack: warning: {_truncation(outcome.label, outcome.frames, outcome.expected_frames)}",
+                reached = outcome.frames + sum(count for _, count in outcome.undecodable)
+                click.echo(f"lptrack: warning: {_truncation(outcome.label, reached, outcome.expected_frames)}",
                            err=True)
             if outcome.roi_flat:
                 click.echo(f"lptrack: warning: {_flat_roi(outcome.label)}", err=True)

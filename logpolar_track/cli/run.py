@@ -435,7 +435,7 @@ def _undecodable(label: str, stretches) -> str:
 
 def _truncation(label: str, frames: int, expected: int) -> str:
     return (f"{label}: ended after {frames} of the {expected} frames its container announces (cut short or "
-            f"damaged?); its outputs hold those {frames}")
+            f"damaged?); its outputs end there")
 
 
 def _stderr_is_terminal() -> bool:

@@ -429,7 +429,8 @@ def outputs_complete(video_out: Path | None, csv_out: Path | None, *, source: Pa
     the end of the video as its container announces it (less 1 %, for containers that only estimate it; when
     the count is unknown, the end is not checked). Its first row must also be the ROI the run would start from
     (``roi``, or None: the video's ``.roi`` sidecar), within 0.05 pixels: a run from a ROI since corrected is
-    redone. (The tracker and its parameters are not in the file, so a run with others is not noticed.)
+    redone. (The tracker, its parameters and a frame rate given are not in the file, so a run with others is not
+    noticed.)
     """
     if video_out is None and csv_out is None:
         return False

@@ -26,8 +26,8 @@ from . import trackers as _trackers
 from .logpolar import within_0_255
 from .results import CsvWriter, FrameResult
 from .trackers import Tracker, create_tracker
-from .video import (CODECS_BY_EXTENSION, VideoReader, VideoWriter, check_output_path, frames_to_track,
-                    is_image_sequence, video_stem, writes_in_place)
+from .video import (CODECS_BY_EXTENSION, VideoReader, VideoWriter, check_frame_number, check_output_path,
+                    frames_to_track, is_image_sequence, video_stem, writes_in_place)
 
 #: Tracker used when none is named: the registry's choice (``trackers.DEFAULT_TRACKER``) when it makes one,
 #: else ``fixed``. Read from one place so the CLI, the docs and the library agree.
@@ -320,8 +320,8 @@ class RunSummary:
 
 
 def _check_max_frames(max_frames: int | None) -> None:
-    if max_frames is not None and max_frames < 1:
-        raise UsageError(f"the number of frames to track must be at least 1, got {max_frames}")
+    if max_frames is not None:
+        check_frame_number(max_frames, "the number of frames to track", low=1)
 
 
 def _no_op() -> None:

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import numbers
 import os
 
 # FFmpeg's own messages ("moov atom not found") would bury ours; FFmpeg reads the variable when a file is
@@ -278,11 +279,23 @@ MIN_VIDEO_FPS = 0.002
 
 
 def check_fps(fps: float | None) -> None:
-    """Refuse a frame rate that is given but not within :data:`FPS_RANGE` (frames per second)."""
+    """Refuse a frame rate that is given but not a number within :data:`FPS_RANGE` (frames per second)."""
     low, high = FPS_RANGE
-    if fps is not None and not (math.isfinite(fps) and low <= fps <= high):
+    if fps is not None and not (_is_number(fps) and math.isfinite(fps) and low <= fps <= high):
+        shown = f"{fps:g}" if _is_number(fps) else repr(fps)
         raise UsageError(f"the frame rate must be a positive number of frames per second, from {low:g} to "
-                         f"{high:,.0f}, got {fps:g}")
+                         f"{high:,.0f}, got {shown}")
+
+
+def check_frame_number(value, what: str, low: int = 0) -> None:
+    """Refuse a frame number or count (``what``, for the message) that is not a whole number of at least ``low``:
+    the library took 1.5 as frame 1 and ``'3'`` raised a TypeError, where the CLI refuses both."""
+    if not (isinstance(value, numbers.Integral) and not isinstance(value, bool) and value >= low):
+        raise UsageError(f"{what} must be a whole number >= {low}, got {value!r}")
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
 def frames_to_track(frame_count: int, start_frame: int, max_frames: int | None) -> int | None:
@@ -346,8 +359,7 @@ class VideoReader:
 
     def __init__(self, path, *, start_frame: int = 0, read_ahead: int = 1, fps: float | None = None):
         self.path = Path(path)
-        if start_frame < 0:
-            raise UsageError(f"start frame must be >= 0, got {start_frame}")
+        check_frame_number(start_frame, "start frame")
         check_fps(fps)
         self.start_frame = int(start_frame)
         self._read_ahead = max(1, int(read_ahead))
@@ -397,7 +409,7 @@ class VideoReader:
             where = ("there" if number == self.start_frame else f"at frame {position}" if number == position + 1
                      else f"at frames {position}-{number - 1}")
             raise VideoError(f"frame {self.start_frame} of '{self.path}' cannot be decoded (the file is damaged "
-                             f"{where}); start at another frame")
+                             f"{where}); give another frame")
         self.first_frame: np.ndarray = first
         self.height, self.width = first.shape[:2]
         # The slots bound the frames decoded ahead, counted from the start of their decoding: a bounded queue

@@ -87,7 +87,7 @@ def test_a_start_frame_that_cannot_be_decoded_is_refused_and_the_next_one_is_exa
     last = first + count - 1
     where = f"frame {first}" if count == 1 else f"frames {first}-{last}"
     message = (f"frame {last} of '{clip.path}' cannot be decoded (the file is damaged at {where}); "
-               f"start at another frame")
+               f"give another frame")
     with pytest.raises(VideoError, match=re.escape(message)):
         VideoReader(clip.path, start_frame=last)
     with VideoReader(clip.path, start_frame=last + 1) as reader:
@@ -750,8 +750,29 @@ def test_an_odd_frame_size_is_padded_not_cut(tmp_path, name):
 def test_a_negative_start_frame_is_bad_usage(tiny_video):
     from logpolar_track.errors import UsageError
 
-    with pytest.raises(UsageError, match="start frame must be >= 0, got -1"):
+    with pytest.raises(UsageError, match="start frame must be a whole number >= 0, got -1"):
         VideoReader(tiny_video.path, start_frame=-1)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"start_frame": 1.5}, "start frame must be a whole number >= 0, got 1.5"),
+    ({"start_frame": "3"}, "start frame must be a whole number >= 0, got '3'"),
+    ({"max_frames": 2.5}, "the number of frames to track must be a whole number >= 1, got 2.5"),
+    ({"max_frames": 0}, "the number of frames to track must be a whole number >= 1, got 0"),
+    ({"fps": "30"}, "the frame rate must be a positive number of frames per second, from 0.001 to 1,000,000, "
+                    "got '30'"),
+    ({"fps": True}, "got True"),
+])
+def test_the_library_refuses_frame_numbers_and_rates_the_cli_refuses(tiny_video, kwargs, message):
+    """track_video took start_frame=1.5 as frame 1 and max_frames=2.5 as 3 frames, and start_frame='3' or fps='30'
+    raised a TypeError: the CLI refuses them all with a usage line."""
+    from logpolar_track.errors import UsageError
+    from logpolar_track.pipeline import track_video
+
+    with pytest.raises(UsageError, match=re.escape(message)):
+        next(track_video(tiny_video.path, "80,60,20", **kwargs))
+    # A NumPy integer is a whole number.
+    assert next(track_video(tiny_video.path, "80,60,20", start_frame=np.int64(2))).frame == 2
 
 
 def test_a_stream_whose_first_frame_is_stamped_late_keeps_its_nominal_times(tiny_video):

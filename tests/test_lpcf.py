@@ -270,6 +270,27 @@ def test_a_turn_beyond_the_motion_prior_is_taken_once_verified(turn, radius):
         assert np.median(angle_errors) <= 0.5 and angle_errors.max() <= 2.0
 
 
+@pytest.mark.parametrize("spin", [8.0, 20.0])
+def test_a_salient_mark_does_not_pull_a_turning_object_off_its_centre(spin):
+    """A textured 50 x 40 px ellipse with a bright dot (radius 8 px) 30 px from its centre, drifting 1.1 px a frame
+    and turning 8 or 20 degrees a frame from the first frame. The filter followed the dot as it turned, the
+    log-polar match at that wrong centre read part of the turn, and the two agreed on a wrong pose: 50-75 px off
+    and reported tracked in 6 of these 8 runs (at 12 degrees a frame 4 of 4; without the dot none; fresh review,
+    2026-12-07). Matched at the predicted centre once the refinement is no longer believed, every frame is now
+    within 0.15 px and 0.2 degrees (measured)."""
+    roi = Ellipse(160, 120, 50, 40, 0)
+    poses = [Pose(160.0 + 1.0 * i, 120.0 + 0.5 * i, 1.0, spin * i) for i in range(30)]
+    for seed in range(4):
+        texture = random_texture(201, 201, np.random.default_rng(seed))
+        cv2.circle(texture, (130, 100), 8, (255, 255, 255), -1)
+        background = random_texture(240, 320, np.random.default_rng(100 + seed))
+        frames = [render_frame(background, texture, roi, pose) for pose in poses]
+        _, results = run(frames, roi)
+        assert all(ok for ok, _ in results)
+        assert centre_errors(results, poses[1:]).max() <= 0.5
+        assert rotation_errors(results, poses[1:]).max() <= 0.5
+
+
 @pytest.mark.parametrize("a, b, spin", [(40, 15, 6.0), (50, 20, 8.0)])
 def test_a_steady_turn_below_the_prediction_threshold_is_predicted(a, b, spin):
     """A textured 80 x 30 or 100 x 40 px ellipse drifting 1.5 px and turning 6 or 8 degrees a frame. On an

@@ -291,6 +291,33 @@ def test_a_salient_mark_does_not_pull_a_turning_object_off_its_centre(spin):
         assert rotation_errors(results, poses[1:]).max() <= 0.5
 
 
+@pytest.mark.parametrize("spin", [1.0, 2.0])
+def test_a_rigid_object_found_again_off_pose_is_put_back_on_it(spin):
+    """The same kind of object (a textured 50 x 30 px ellipse with a bright dot), drifting and turning 1 or 2
+    degrees a frame, hidden for frames 15-24. The search finds it again some pixels and degrees off, and there the
+    filter, pulled towards the dot, and the log-polar match agreed on the wrong pose: at the end 5 px and 10 degrees
+    off in 2 of 4 runs at 1 degree a frame, 11-23 px and 23-53 degrees in 4 of 4 at 2 (a fresh review found it).
+    Every run whose track was reported lost under the cover and resumed now ends within 0.1 px and 0.2 degrees
+    (measured); one run at 2 degrees a frame is reported tracked on the background under the cover instead, never
+    resumes, and ends 11 px off (a limit: docs/lpcf.md)."""
+    roi = Ellipse(150, 120, 50, 30, 20)
+    poses = [Pose(150.0 + 1.0 * i, 120.0 + 0.5 * i, 1.0, spin * i) for i in range(40)]
+    resumed = 0
+    for seed in range(4):
+        texture = random_texture(201, 201, np.random.default_rng(seed))
+        cv2.circle(texture, (128, 90), 8, (255, 255, 255), -1)
+        background = random_texture(240, 320, np.random.default_rng(100 + seed))
+        frames = [background.copy() if 15 <= i < 25 else render_frame(background, texture, roi, pose)
+                  for i, pose in enumerate(poses)]
+        _, results = run(frames, roi)
+        if all(ok for ok, _ in results[14:24]):
+            continue  # reported tracked on the background under the cover: not a track that resumed
+        resumed += 1
+        assert centre_errors(results[-10:], poses[-10:]).max() <= 0.5
+        assert rotation_errors(results[-10:], poses[-10:]).max() <= 0.5
+    assert resumed >= 3
+
+
 @pytest.mark.parametrize("a, b, spin", [(40, 15, 6.0), (50, 20, 8.0)])
 def test_a_steady_turn_below_the_prediction_threshold_is_predicted(a, b, spin):
     """A textured 80 x 30 or 100 x 40 px ellipse drifting 1.5 px and turning 6 or 8 degrees a frame. On an

@@ -910,15 +910,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             return None
         kept = self._last_sample, self._lp_sample
         turned, height = self._scale_rotate(frame, predicted)
-        if height >= _PREDICTED_POSE_MIN_MATCH:
-            turned, _ = self._scale_rotate(frame, turned)
-            other, psr, peak = self._translate(frame, turned)
-            turned, lp_height = self._scale_rotate(frame, other)
-            aligned, distance = self._refine(frame, turned)
-            if distance < self.refine_max_distance:
-                return aligned, psr, peak, lp_height, distance
-        self._last_sample, self._lp_sample = kept
-        return None
+        if height < _PREDICTED_POSE_MIN_MATCH:
+            self._last_sample, self._lp_sample = kept
+            return None
+        return self._verified_pose(frame, self._scale_rotate(frame, turned)[0], kept)
 
     def _pose_around(self, frame, around: Similarity):
         """The pose of a rigid object found again after a loss, from the filter at turns around ``around``'s angle:
@@ -949,12 +944,20 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             turned, height = self._scale_rotate(frame, turned)
             if height > best_height:
                 best_height, best = height, turned
-        if best_height >= _PREDICTED_POSE_MIN_MATCH:
-            other, psr, peak = self._translate(frame, best)
-            turned, lp_height = self._scale_rotate(frame, other)
-            aligned, distance = self._refine(frame, turned)
-            if distance < self.refine_max_distance:
-                return aligned, psr, peak, lp_height, distance
+        if best_height < _PREDICTED_POSE_MIN_MATCH:
+            self._last_sample, self._lp_sample = kept
+            return None
+        return self._verified_pose(frame, best, kept)
+
+    def _verified_pose(self, frame, pose: Similarity, kept: tuple):
+        """The filter, the log-polar match and the refinement from ``pose``: ``(aligned, psr, peak, lp_height,
+        distance)`` if the refinement is believed there; else None, with the samples kept for learning put back to
+        ``kept`` (see :meth:`_pose_from_prediction`)."""
+        other, psr, peak = self._translate(frame, pose)
+        turned, lp_height = self._scale_rotate(frame, other)
+        aligned, distance = self._refine(frame, turned)
+        if distance < self.refine_max_distance:
+            return aligned, psr, peak, lp_height, distance
         self._last_sample, self._lp_sample = kept
         return None
 

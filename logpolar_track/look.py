@@ -468,8 +468,8 @@ def roi_from_points(points, *, round_tolerance: float = ROUND_TOLERANCE) -> Elli
     -----
     Points given more than once count once. 3 or 4 points determine a circle but not an ellipse (5 parameters):
     they give the least-squares circle through them (Kasa's algebraic fit). 5 or more give OpenCV's direct
-    least-squares ellipse fit
-    (``cv2.fitEllipseDirect``, Fitzgibbon, Pilu and Fisher, TPAMI 1999, which always returns an ellipse).
+    least-squares ellipse fit (``cv2.fitEllipseDirect``, Fitzgibbon, Pilu and Fisher, TPAMI 1999, which always
+    returns an ellipse).
     OpenCV reports the rotated rectangle's angle in image coordinates (y down), i.e. clockwise on screen, and
     which side is "width" has changed between versions; the orientation is therefore taken from whichever
     reading of ``(w, h, angle)`` fits the points best, so it comes out counter-clockwise on screen whatever

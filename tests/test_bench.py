@@ -718,6 +718,13 @@ def test_eval_inputs_and_outputs(dataset, tmp_path):
     assert res.exit_code == 0
     assert res.stderr == (f"lptrack: note: '{pred}' has no row for {N_FRAMES - 3} of the {N_FRAMES} frames with "
                           f"ground truth; they are not scored\n")
+    # A ground truth that ends before the run (cut short, or another sequence's) was used in silence.
+    short = tmp_path / "short.gt.csv"
+    short.write_text("".join((dataset / "alpha.gt.csv").read_text().splitlines(keepends=True)[:3]))  # 2 frames
+    res = _run("eval", pred, short)
+    assert res.exit_code == 0
+    assert res.stderr == (f"lptrack: note: 1 of the 3 rows of '{pred}' lies past the end of '{short}' (2 frames); "
+                          f"they are not scored (is it this video's ground truth?)\n")
 
 
 def test_plot(dataset, tmp_path):

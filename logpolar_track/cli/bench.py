@@ -347,6 +347,13 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, ove
         total = metrics["frames_scored"] + metrics["frames_missing"]
         click.echo(f"lptrack: note: '{prediction}' has no row for {metrics['frames_missing']} of the {total} frames "
                    f"with ground truth; they are not scored", err=True)
+    # The other way round too: a ground truth cut short, or another sequence's, scored part of the run in silence.
+    beyond = int((track.frames >= len(gt)).sum())
+    if beyond:
+        click.echo(f"lptrack: note: {beyond} of the {len(track.frames)} rows of '{prediction}' "
+                   f"{'lies' if beyond == 1 else 'lie'} past the end of "
+                   f"'{ground_truth}' ({len(gt)} frames); they are not scored (is it this video's ground truth?)",
+                   err=True)
     row = {"sequence": prediction.name, "tracker": "(csv)", **metrics}
     table = format_table([row], [], speed=False)
     if json_out is None:

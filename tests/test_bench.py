@@ -210,6 +210,11 @@ def test_bench_json_to_stdout_is_only_json(dataset, tmp_path):
     doc = json.loads(res.stdout)
     assert len(doc["results"][0]["iou"]) == N_FRAMES
     assert "mean (2)" in res.stderr  # the table went to stderr
+    # Without a JSON to hold them the arrays went nowhere, and nothing said so.
+    res = _run("bench", "--dataset", dataset, "--trackers", "cv-mil", "--per-frame", "-q")
+    assert res.exit_code == 2 and res.stdout == ""
+    assert res.stderr == ("lptrack: error: --per-frame adds per-frame arrays to the JSON; give --json PATH "
+                          "(or --json -) too\n")
 
 
 def test_run_bench_in_processes_keeps_order_and_numbers(dataset):

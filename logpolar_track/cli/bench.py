@@ -75,7 +75,8 @@ Examples:
 @click.option("--json", "json_out", metavar="PATH|-",
               help="Write every number, versions, machine and parameters as JSON; '-' for stdout (then the "
                    "table goes to stderr).")
-@click.option("--per-frame", is_flag=True, help="Include per-frame IoU and centre error arrays in the JSON.")
+@click.option("--per-frame", is_flag=True, help="Include per-frame IoU and centre error arrays in the --json "
+              "file (with --starts, those of the first start: the ground truth's ROI).")
 @click.option("--plot", "plot_out", metavar="PATH.png", type=click.Path(dir_okay=False, path_type=Path),
               help="Save success and precision plots (needs matplotlib: pip install matplotlib).")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=1, show_default=True, metavar="N",
@@ -137,6 +138,9 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
                              "--per-frame, --plot, --starts, --backwards, --every, --passes, --threads, --param, "
                              "--jobs or --scheduler")
     check_jobs_or_scheduler(jobs_given, scheduler)
+    if per_frame and json_out is None:
+        # It adds arrays to the JSON, and without one it was ignored in silence.
+        raise UsageError("--per-frame adds per-frame arrays to the JSON; give --json PATH (or --json -) too")
     # Outputs are checked before the work (a benchmark may run for hours), as `lptrack run` checks its own.
     _check_json_out(json_out, overwrite)
     if speed:

@@ -238,9 +238,6 @@ class _ImageSequenceCapture:
         self._next += 1
         return True
 
-    def read(self) -> tuple[bool, np.ndarray | None]:
-        return self.retrieve() if self.grab() else (False, None)
-
     def retrieve(self) -> tuple[bool, np.ndarray | None]:
         file = self._files[self._next - 1]
         frame = cv2.imread(opencv_path(file, "image"), cv2.IMREAD_COLOR)
@@ -673,7 +670,7 @@ def check_output_path(path, *, overwrite: bool = False, what: str = "output", sp
         raise OutputError(f"cannot write {what} '{path}': folder '{folder}' is not writable")
     if path.is_dir():
         raise OutputError(f"cannot write {what} '{path}': it is a folder")
-    if (path.exists() or path.is_symlink()) and not overwrite:  # a dangling link is a name taken too
+    if os.path.lexists(path) and not overwrite:  # a dangling link is a name taken too
         raise OutputError(f"{what} '{path}' already exists; use --overwrite to replace it{keep_hint}")
     return path
 
@@ -706,7 +703,7 @@ def move_into_place(temp: Path, path: Path, *, overwrite: bool = False, what: st
     except OSError:
         # No hard links here (FAT, exFAT, many network shares, which report it under several error numbers): the
         # name is checked once more and renamed over, so that a finished output is never lost for want of a link.
-        if path.exists() or path.is_symlink():
+        if os.path.lexists(path):
             raise taken from None
         os.replace(temp, path)
         return
@@ -900,11 +897,9 @@ class VideoWriter:
             self._check_readable()
             move_into_place(self._temp, self.path, overwrite=self.overwrite, what="output video")
         except OSError as exc:
-            self._temp.unlink(missing_ok=True)
             raise OutputError(f"cannot write video '{self.path}': {exc.strerror or exc}") from None
-        except OutputError:
-            self._temp.unlink(missing_ok=True)
-            raise
+        finally:
+            self._temp.unlink(missing_ok=True)  # gone once moved into place; left on any failure
         return self.path
 
     def _check_readable(self) -> None:

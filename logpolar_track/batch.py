@@ -36,8 +36,8 @@ from .pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, mirror
                        read_roi_text, run_video)
 from .results import FORMATS, header_line
 from .trackers import tracker_class
-from .video import (CODECS_BY_EXTENSION, announced_frame_count, check_fps, frames_to_track, make_output_folder,
-                    is_image_sequence, remove_empty_folders, temporary_path, video_stem)
+from .outputs import make_output_folder, remove_empty_folders, temporary_path
+from .video import CODECS_BY_EXTENSION, announced_frame_count, check_fps, frames_to_track, is_image_sequence, video_stem
 
 #: File extensions searched for in input folders (case-insensitive).
 VIDEO_EXTENSIONS: tuple[str, ...] = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".ts",

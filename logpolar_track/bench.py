@@ -34,7 +34,7 @@ from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_thread
 from .geometry import Ellipse
 from .look import PLOT_SUFFIXES, check_image_suffix
 from .trackers import create_tracker, tracker_class, tracker_names
-from .video import move_into_place, writes_in_place
+from .outputs import writes_in_place, written_into_place
 from .trackers import opencv as _opencv_peers  # noqa: F401  (registers cv-mil, cv-kcf, cv-csrt)
 
 #: Version of the JSON document written by :func:`bench_document`; bump on incompatible changes.
@@ -655,7 +655,7 @@ def bench_document(results: list[dict], summary: list[dict], sequences: list[Seq
 
 def write_text_atomic(path, text: str, *, overwrite: bool = True) -> None:
     """Write ``text`` to ``path`` via a temporary file in the same folder, renamed when complete (over an existing
-    file only with ``overwrite``: see :func:`~logpolar_track.video.move_into_place`).
+    file only with ``overwrite``: see :func:`~logpolar_track.outputs.move_into_place`).
 
     Raises
     ------
@@ -668,18 +668,12 @@ def write_text_atomic(path, text: str, *, overwrite: bool = True) -> None:
             with open(path, "w", encoding="utf-8") as stream:
                 stream.write(text)
         except OSError as exc:
-            raise OutputError(f"cannot write '{path}': {exc.strerror or exc}") from None
+            raise OutputError(f"cannot write JSON output '{path}': {exc.strerror or exc}") from None
         return
     if not path.parent.is_dir():
-        raise OutputError(f"cannot write '{path}': folder '{path.parent}' does not exist")
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        move_into_place(tmp, path, overwrite=overwrite, what="JSON output")
-    except OSError as exc:
-        raise OutputError(f"cannot write '{path}': {exc.strerror or exc}") from None
-    finally:
-        tmp.unlink(missing_ok=True)  # gone once moved into place; left on any failure
+        raise OutputError(f"cannot write JSON output '{path}': folder '{path.parent}' does not exist")
+    with written_into_place(path, overwrite=overwrite, what="JSON output") as temp:
+        temp.write_text(text, encoding="utf-8")
 
 
 def matplotlib_missing() -> str | None:
@@ -716,7 +710,7 @@ def plot_curves(summary: list[dict], path, caption: str | None = None, *, overwr
 
     path = Path(path)
     if not path.parent.is_dir():
-        raise OutputError(f"cannot write '{path}': folder '{path.parent}' does not exist")
+        raise OutputError(f"cannot write plot '{path}': folder '{path.parent}' does not exist")
     fig, (ax_s, ax_p) = plt.subplots(1, 2, figsize=(11, 4.5))
     # Each tracker keeps its colour in both panels (the legends are ranked, each by its own panel's figure).
     palette = plt.rcParams["axes.prop_cycle"].by_key()["color"]
@@ -737,14 +731,10 @@ def plot_curves(summary: list[dict], path, caption: str | None = None, *, overwr
     if caption:
         fig.suptitle(caption, fontsize=10)
     fig.tight_layout()
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
     try:
-        fig.savefig(tmp, dpi=100)
-        move_into_place(tmp, path, overwrite=overwrite, what="plot")
-    except OSError as exc:
-        raise OutputError(f"cannot write '{path}': {exc.strerror or exc}") from None
+        with written_into_place(path, overwrite=overwrite, what="plot") as temp:
+            fig.savefig(temp, dpi=100)
     finally:
-        tmp.unlink(missing_ok=True)  # gone once moved into place; left on any failure
         plt.close(fig)
 
 

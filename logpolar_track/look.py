@@ -43,8 +43,8 @@ from .evaluate import (GroundTruthError, Track, read_data_file, rotation_errors,
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
 from .results import COLUMNS, FrameResult, off_contract
 from .trackers.base import TrackState
-from .video import (VideoReader, check_output_path, guess_image_sequence, move_into_place, temporary_path,
-                    video_stem)
+from .outputs import check_output_path, written_into_place
+from .video import VideoReader, guess_image_sequence, video_stem
 
 #: BGR colour of the grid lines drawn by :func:`draw_grid` (cyan: rare in natural images, legible on both
 #: dark and light backgrounds).
@@ -307,14 +307,8 @@ def write_png(path, image: np.ndarray, *, overwrite: bool = False, what: str = "
     ok, encoded = cv2.imencode(".png", image)
     if not ok:
         raise OutputError(f"cannot write {what} '{path}': PNG encoding failed")
-    temp = temporary_path(path)
-    try:
+    with written_into_place(path, overwrite=overwrite, what=what) as temp:
         temp.write_bytes(encoded.tobytes())
-        move_into_place(temp, path, overwrite=overwrite, what=what)
-    except OSError as exc:
-        raise OutputError(f"cannot write {what} '{path}': {exc.strerror or exc}") from None
-    finally:
-        temp.unlink(missing_ok=True)
     return path
 
 
@@ -900,19 +894,15 @@ def plot_track(run, out_png, *, video=None, ground_truth=None, overwrite: bool =
     axes[-1].set_xlabel("time (s)")
     n_lost = int(lost.sum())
     fig.suptitle(title or f"{table.source}: {len(table)} frames, {n_lost} lost", fontsize=11)
-    temp = temporary_path(Path(out_png))
     try:
-        with warnings.catch_warnings():
+        with written_into_place(out_png, overwrite=overwrite, what="output image") as temp, \
+                warnings.catch_warnings():
             # A file name in a script the font lacks (CJK) is drawn as boxes; matplotlib's warning about each
             # glyph, with its source line, would reach the user's terminal twice per character.
             warnings.filterwarnings("ignore", message="Glyph .* missing from", category=UserWarning)
             fig.tight_layout()
             fig.savefig(temp, dpi=PLOT_DPI)
-        move_into_place(temp, out_png, overwrite=overwrite, what="output image")
-    except OSError as exc:
-        raise OutputError(f"cannot write '{out_png}': {exc.strerror or exc}") from None
     finally:
-        temp.unlink(missing_ok=True)
         plt.close(fig)
     return Path(out_png)
 

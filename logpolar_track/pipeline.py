@@ -26,8 +26,9 @@ from . import trackers as _trackers
 from .logpolar import within_0_255
 from .results import CsvWriter, FrameResult
 from .trackers import Tracker, create_tracker
-from .video import (CODECS_BY_EXTENSION, VideoReader, VideoWriter, check_frame_number, check_output_path,
-                    frames_to_track, is_image_sequence, video_stem, writes_in_place)
+from .outputs import check_output_path, writes_in_place
+from .video import (CODECS_BY_EXTENSION, VideoReader, VideoWriter, check_frame_number, frames_to_track,
+                    is_image_sequence, video_stem)
 
 #: Tracker used when none is named: the registry's choice (``trackers.DEFAULT_TRACKER``) when it makes one,
 #: else ``fixed``. Read from one place so the CLI, the docs and the library agree.
@@ -362,7 +363,7 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
             # rather than as a missing extension, as for the CSV.
             check_output_path(video_out, what="output video")
         if Path(video_out).suffix.lower() not in CODECS_BY_EXTENSION:
-            raise UsageError(f"cannot write video '{video_out}': unsupported extension "
+            raise UsageError(f"cannot write output video '{video_out}': unsupported extension "
                              f"'{Path(video_out).suffix}'; use one of {', '.join(CODECS_BY_EXTENSION)}")
         planned.append((Path(video_out), "output video"))
     if csv_out is not None and str(csv_out) != "-":

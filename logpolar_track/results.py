@@ -41,7 +41,7 @@ from typing import IO
 from .errors import OutputError
 from .geometry import wrap_degrees
 from .trackers.base import TrackState
-from .video import check_output_path, move_into_place, writes_in_place, temporary_path
+from .outputs import check_output_path, temporary_path, writes_in_place, written_into_place
 
 #: The run CSV's columns, in order. A contract: never reorder or rename; only append.
 COLUMNS: tuple[str, ...] = ("frame", "time_s", "cx", "cy", "a", "b", "angle_deg", "scale", "rotation_deg",
@@ -348,15 +348,14 @@ class CsvWriter:
             with stdout_errors():
                 self._file.flush()
             return
-        try:
+        if self._temp is None:  # a device or pipe, written directly
+            try:
+                self._file.close()
+            except OSError as exc:
+                raise OutputError(f"cannot write output CSV '{self.path}': {exc.strerror or exc}") from None
+            return
+        with written_into_place(self.path, overwrite=self.overwrite, what="output CSV", temp=self._temp):
             self._file.close()
-            if self._temp is not None:
-                move_into_place(self._temp, self.path, overwrite=self.overwrite, what="output CSV")
-        except OSError as exc:
-            raise OutputError(f"cannot write output CSV '{self.path}': {exc.strerror or exc}") from None
-        finally:
-            if self._temp is not None:
-                self._temp.unlink(missing_ok=True)  # gone once moved into place; left on any failure
 
     def abort(self) -> None:
         """Stop and delete the temporary file (stdout is only flushed). Safe to call more than once."""

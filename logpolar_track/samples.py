@@ -33,6 +33,7 @@ import cv2
 import numpy as np
 
 from .errors import LptrackError, OutputError, UsageError
+from .outputs import written_into_place
 from .geometry import Ellipse, wrap_degrees
 from .synthetic import Pose, random_texture
 
@@ -818,13 +819,6 @@ def gt_line(row: tuple) -> str:
     return f"{k},{cx:.3f},{cy:.3f},{a:.3f},{b:.3f},{angle:.3f},{scale:.5f},{rot:.3f}"
 
 
-def _replace(tmp: Path, final: Path) -> None:
-    try:
-        os.replace(tmp, final)
-    except OSError as exc:
-        raise OutputError(f"cannot write {final}: {exc.strerror or exc}") from None
-
-
 def write_sample(scene: Scene, out_dir: str | os.PathLike, *,
                  on_frame: Callable[[int], None] | None = None) -> list[Path]:
     """Write ``<name>.mp4`` (mp4v, 25 fps), ``<name>.gt.csv`` and ``<name>.roi`` into ``out_dir``.
@@ -850,41 +844,31 @@ def write_sample(scene: Scene, out_dir: str | os.PathLike, *,
     if not out.is_dir():
         raise OutputError(f"output folder {out} does not exist")
     video, gt, roi = out / f"{scene.name}.mp4", out / f"{scene.name}.gt.csv", out / f"{scene.name}.roi"
-    tmp_video = out / f".{scene.name}.partial.mp4"
-    writer = cv2.VideoWriter(str(tmp_video), cv2.VideoWriter_fourcc(*"mp4v"), FPS, scene.size)
-    if not writer.isOpened():
-        raise OutputError(f"cannot open an mp4v video writer for {tmp_video}")
-    try:
-        for k in range(scene.n_frames):
-            writer.write(scene.render(k))
-            if on_frame is not None:
-                on_frame(k)
-    except BaseException:
-        writer.release()
-        tmp_video.unlink(missing_ok=True)
-        raise
-    writer.release()
-    lines = [",".join(GT_COLUMNS)] + [gt_line(scene.ground_truth(k)) for k in range(scene.n_frames)]
-    for final, text in ((gt, "\n".join(lines) + "\n"), (roi, scene.roi.to_spec() + "\n")):
-        tmp = out / f".{final.name}.partial"
+    # The ground truth is moved into place after the video is rendered and before the video is: a run stopped
+    # while rendering leaves the files it found, never a video beside another scene's ground truth.
+    with written_into_place(video, overwrite=True, what="sample video") as temp_video:
+        writer = cv2.VideoWriter(str(temp_video), cv2.VideoWriter_fourcc(*"mp4v"), FPS, scene.size)
+        if not writer.isOpened():
+            raise OutputError(f"cannot write sample video '{video}': no mp4v video writer could be opened")
         try:
-            tmp.write_text(text, encoding="utf-8")
-        except OSError as exc:
-            raise OutputError(f"cannot write {final}: {exc.strerror or exc}") from None
-        _replace(tmp, final)
-    _replace(tmp_video, video)
+            for k in range(scene.n_frames):
+                writer.write(scene.render(k))
+                if on_frame is not None:
+                    on_frame(k)
+        finally:
+            writer.release()
+        lines = [",".join(GT_COLUMNS)] + [gt_line(scene.ground_truth(k)) for k in range(scene.n_frames)]
+        for final, text in ((gt, "\n".join(lines) + "\n"), (roi, scene.roi.to_spec() + "\n")):
+            with written_into_place(final, overwrite=True, what="sample file") as temp:
+                temp.write_text(text, encoding="utf-8")
     return [video, gt, roi]
 
 
 def write_readme(scenes: list[Scene], out_dir: str | os.PathLike, seed: int = DEFAULT_SEED) -> Path:
     """Write ``README.md`` (see :func:`readme_text`) into ``out_dir``; returns its path."""
     path = Path(out_dir) / "README.md"
-    tmp = path.with_name(".README.md.partial")
-    try:
-        tmp.write_text(readme_text(scenes, seed), encoding="utf-8")
-    except OSError as exc:
-        raise OutputError(f"cannot write {path}: {exc.strerror or exc}") from None
-    _replace(tmp, path)
+    with written_into_place(path, overwrite=True, what="sample README") as temp:
+        temp.write_text(readme_text(scenes, seed), encoding="utf-8")
     return path
 
 

@@ -40,6 +40,7 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from .errors import FrameRangeError, LptrackError, OutputError, UsageError, VideoError, counted  # noqa: E402
+from .outputs import check_output_path, temporary_path, written_into_place  # noqa: E402
 
 #: Frame rate assumed when a container reports none (0 or NaN), in frames per second.
 FALLBACK_FPS = 25.0
@@ -631,125 +632,6 @@ def _fourcc(capture: cv2.VideoCapture) -> str:
     return bytes((code >> shift) & 0xFF for shift in (0, 8, 16, 24)).decode("latin-1").strip("\0 ")
 
 
-def temporary_path(path: Path, *, pid: int | None = None) -> Path:
-    """A hidden temporary name next to ``path`` that keeps its extension last (so OpenCV picks the container).
-
-    ``out/run.mp4`` -> ``out/.run.<pid>.part.mp4``. The process id (this process's unless ``pid`` is given)
-    keeps concurrent runs apart, and lets a parent find what a killed worker left.
-    """
-    return path.with_name(f".{path.stem}.{os.getpid() if pid is None else pid}.part{path.suffix}")
-
-
-def check_output_path(path, *, overwrite: bool = False, what: str = "output", special_ok: bool = False,
-                      keep_hint: str = "") -> Path:
-    """Check that ``path`` can be written; return it as a :class:`Path`.
-
-    ``special_ok`` accepts what :func:`writes_in_place` -- ``/dev/null``, ``/dev/stdout``, a named pipe, a
-    process substitution's ``/dev/fd/N`` -- which is then written directly, never replaced. ``keep_hint`` is
-    added to the message about an existing file (another way to go on than ``--overwrite``).
-
-    Raises
-    ------
-    OutputError
-        If its folder does not exist, is not a folder or is not writable, if ``path`` is a folder, if ``path``
-        exists and ``overwrite`` is False, or if it is written in place and ``special_ok`` is False.
-    """
-    if str(path).endswith(("/", os.sep)):  # Path() drops the slash: 'out/' would be written as a file 'out'
-        raise OutputError(f"cannot write {what} '{path}': it names a folder; give a file name")
-    path = Path(path)
-    if writes_in_place(path):
-        if special_ok:
-            return path
-        raise OutputError(f"cannot write {what} '{path}': it is a device or stream, not a file; give a file name")
-    folder = path.parent
-    if not folder.exists():
-        raise OutputError(f"cannot write {what} '{path}': folder '{folder}' does not exist")
-    if not folder.is_dir():
-        raise OutputError(f"cannot write {what} '{path}': '{folder}' is not a folder")
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise OutputError(f"cannot write {what} '{path}': folder '{folder}' is not writable")
-    if path.is_dir():
-        raise OutputError(f"cannot write {what} '{path}': it is a folder")
-    if os.path.lexists(path) and not overwrite:  # a dangling link is a name taken too
-        raise OutputError(f"{what} '{path}' already exists; use --overwrite to replace it{keep_hint}")
-    return path
-
-
-def move_into_place(temp: Path, path: Path, *, overwrite: bool = False, what: str = "output") -> None:
-    """Rename the finished temporary file ``temp`` to ``path`` (same folder).
-
-    With ``overwrite`` an existing ``path`` is replaced. Without it the name is claimed only if still free: another
-    run writing the same name at the same time (``xargs -P`` over videos of one name in different folders, both
-    with ``--out-dir tracks``) passed :func:`check_output_path` too, and a plain rename would silently replace the
-    output of whichever finished first. The file is linked to its name, which fails if the name exists, and the
-    temporary name removed; on a file system without hard links the name is checked once more and renamed over.
-
-    Raises
-    ------
-    OutputError
-        If ``path`` exists and ``overwrite`` is False (``temp`` is left for the caller to delete).
-    OSError
-        If the rename fails otherwise.
-    """
-    if overwrite:
-        os.replace(temp, path)
-        return
-    taken = OutputError(f"{what} '{path}' already exists (written while this run went on); use --overwrite to "
-                        f"replace it")
-    try:
-        os.link(temp, path)
-    except FileExistsError:
-        raise taken from None
-    except OSError:
-        # No hard links here (FAT, exFAT, many network shares, which report it under several error numbers): the
-        # name is checked once more and renamed over, so that a finished output is never lost for want of a link.
-        if os.path.lexists(path):
-            raise taken from None
-        os.replace(temp, path)
-        return
-    with contextlib.suppress(OSError):  # the output is in place; a temporary name left behind is only clutter
-        temp.unlink()
-
-
-def writes_in_place(path) -> bool:
-    """Whether output to ``path`` goes straight into it, never through a temporary file renamed over it: a
-    device, pipe or socket, or any path under ``/dev`` or ``/proc`` (``/dev/stdout`` and ``/proc/self/fd/1``
-    are streams even when they lead to a regular file, and renaming over them would replace the link)."""
-    path = Path(path)
-    if str(path.absolute()).startswith(("/dev/", "/proc/")):
-        return True
-    return path.exists() and not path.is_file() and not path.is_dir()
-
-
-def make_output_folder(folder) -> list[Path]:
-    """Create ``folder`` and its missing parents; return the folders created, outermost first.
-
-    Raises
-    ------
-    OutputError
-        If a part of the path is a file, or the folder cannot be created (permissions, read-only file system).
-    """
-    folder = Path(folder)
-    missing = [p for p in [folder, *folder.parents] if not p.exists()][::-1]
-    blocking = next((p for p in [folder, *folder.parents] if p.exists() and not p.is_dir()), None)
-    if blocking is not None:
-        raise OutputError(f"cannot create output folder '{folder}': '{blocking}' is a file, not a folder")
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"cannot create output folder '{folder}': {exc.strerror or exc}") from None
-    return missing
-
-
-def remove_empty_folders(folders) -> None:
-    """Remove those of ``folders`` that are empty, innermost first (undoing :func:`make_output_folder`)."""
-    for folder in sorted(map(Path, folders), key=lambda p: len(p.parts), reverse=True):
-        try:
-            folder.rmdir()
-        except OSError:  # not empty (another output went there), or already gone
-            pass
-
-
 class VideoWriter:
     """An annotated video written atomically, with codec fallback.
 
@@ -794,12 +676,12 @@ class VideoWriter:
         wanted = Path(path)
         suffix = wanted.suffix.lower()
         if suffix not in CODECS_BY_EXTENSION:
-            raise OutputError(f"cannot write video '{wanted}': unsupported extension '{wanted.suffix}'; "
+            raise OutputError(f"cannot write output video '{wanted}': unsupported extension '{wanted.suffix}'; "
                               f"use one of {', '.join(CODECS_BY_EXTENSION)}")
         if not (math.isfinite(fps) and fps > 0):
-            raise OutputError(f"cannot write video '{wanted}': frame rate must be > 0, got {fps}")
+            raise OutputError(f"cannot write output video '{wanted}': frame rate must be > 0, got {fps}")
         if fps < MIN_VIDEO_FPS:  # refused now, not after the whole run was tracked
-            raise OutputError(f"cannot write video '{wanted}': {fps:g} frames/s is below the {MIN_VIDEO_FPS:g} the "
+            raise OutputError(f"cannot write output video '{wanted}': {fps:g} frames/s is below the {MIN_VIDEO_FPS:g} the "
                               f"video encoders take; give a higher --fps, or --no-video")
         self.path = check_output_path(wanted, overwrite=overwrite, what="output video")
         self.wanted_path = self.path
@@ -843,7 +725,7 @@ class VideoWriter:
             writer.release()
             temp.unlink(missing_ok=True)
             tried.append(f"{code}{extension}")
-        raise OutputError(f"cannot write video '{self.wanted_path}': no codec could be opened "
+        raise OutputError(f"cannot write output video '{self.wanted_path}': no codec could be opened "
                           f"(tried {', '.join(tried)})")
 
     def write(self, frame: np.ndarray) -> None:
@@ -863,7 +745,7 @@ class VideoWriter:
         if self._writer is None:
             self._open(width, height)
         elif (width, height) != self.size:
-            raise OutputError(f"cannot write video '{self.path}': frame {self.frames_written} is "
+            raise OutputError(f"cannot write output video '{self.path}': frame {self.frames_written} is "
                               f"{width}x{height}, the video is {self.size[0]}x{self.size[1]}")
         self._encoder.put(np.ascontiguousarray(frame, dtype=np.uint8))
         self._raise_failure()
@@ -872,7 +754,7 @@ class VideoWriter:
     def _raise_failure(self) -> None:
         failure = self._encoder.failure if self._encoder is not None else None
         if failure is not None:
-            raise OutputError(f"cannot write video '{self.path}': {failure}") from failure
+            raise OutputError(f"cannot write output video '{self.path}': {failure}") from failure
 
     def close(self) -> Path | None:
         """Finish the video and move it to :attr:`path`; returns that path (None if no frame was written).
@@ -889,17 +771,12 @@ class VideoWriter:
             return None
         self._encoder.finish()
         self._writer.release()
-        try:
+        with written_into_place(self.path, overwrite=self.overwrite, what="output video", temp=self._temp):
             self._raise_failure()
             if not self._temp.exists() or self._temp.stat().st_size == 0:
-                raise OutputError(f"cannot write video '{self.path}': the {self.fourcc} encoder produced "
+                raise OutputError(f"cannot write output video '{self.path}': the {self.fourcc} encoder produced "
                                   f"no data")
             self._check_readable()
-            move_into_place(self._temp, self.path, overwrite=self.overwrite, what="output video")
-        except OSError as exc:
-            raise OutputError(f"cannot write video '{self.path}': {exc.strerror or exc}") from None
-        finally:
-            self._temp.unlink(missing_ok=True)  # gone once moved into place; left on any failure
         return self.path
 
     def _check_readable(self) -> None:
@@ -926,7 +803,7 @@ class VideoWriter:
         if not (last and not short):
             read = (f"holds {max(count, 0)} frames by its header" if opened and short
                     else "cannot be read to its last frame" if opened else "cannot be read back")
-            raise OutputError(f"cannot write video '{self.path}': the finished file {read}, of the "
+            raise OutputError(f"cannot write output video '{self.path}': the finished file {read}, of the "
                               f"{self.frames_written} written (is the disk full?)")
 
     def abort(self) -> None:

@@ -20,7 +20,8 @@ import pytest
 from conftest import count_frames, damage_middle, decode_all, write_video
 from logpolar_track import video as video_module
 from logpolar_track.errors import OutputError, VideoError
-from logpolar_track.video import FALLBACK_FPS, VideoReader, VideoWriter, temporary_path
+from logpolar_track.outputs import temporary_path
+from logpolar_track.video import FALLBACK_FPS, VideoReader, VideoWriter
 
 
 @pytest.mark.parametrize("name", ["clip.mp4", "clip.avi"])

@@ -14,7 +14,7 @@ from ..bench import (STARTS, bench_document, collect_sequences, default_dataset,
 from ..errors import UsageError
 from ..executor import TRACKING_OPENCV_THREADS
 from ..look import PLOT_SUFFIXES, check_image_suffix
-from ..video import check_output_path
+from ..outputs import check_output_path
 from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, check_jobs_or_scheduler, main, parse_param_options,
                require_stdout, write_stdout)
 

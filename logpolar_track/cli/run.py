@@ -25,7 +25,8 @@ from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, defau
 from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..trackers.base import did_you_mean
-from ..video import check_fps, guess_image_sequence, input_label, make_output_folder, remove_empty_folders
+from ..outputs import make_output_folder, remove_empty_folders
+from ..video import check_fps, guess_image_sequence, input_label
 from . import (EXIT_FAILURE, PARAM_HELP, FrameRate, OneLineErrors, check_jobs_or_scheduler, main,
                parse_param_options, parse_roi_option, stdout_reader_left)
 

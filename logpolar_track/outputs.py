@@ -1,0 +1,160 @@
+"""Output files: checked before any work, written under a temporary name, moved into place when complete.
+
+Every file lptrack writes (CSV, video, PNG, JSON, plots, sample videos) goes through here, so that a run that
+fails or is stopped never leaves a file that looks finished, and an existing output is replaced only when asked
+(``--overwrite``). Devices, pipes and ``/dev/stdout`` are written directly (:func:`writes_in_place`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from pathlib import Path
+from typing import Iterator
+
+from .errors import OutputError
+
+
+def temporary_path(path: Path, *, pid: int | None = None) -> Path:
+    """A hidden temporary name next to ``path`` that keeps its extension last (so OpenCV picks the container).
+
+    ``out/run.mp4`` -> ``out/.run.<pid>.part.mp4``. The process id (this process's unless ``pid`` is given)
+    keeps concurrent runs apart, and lets a parent find what a killed worker left.
+    """
+    return path.with_name(f".{path.stem}.{os.getpid() if pid is None else pid}.part{path.suffix}")
+
+
+def check_output_path(path, *, overwrite: bool = False, what: str = "output", special_ok: bool = False,
+                      keep_hint: str = "") -> Path:
+    """Check that ``path`` can be written; return it as a :class:`Path`.
+
+    ``special_ok`` accepts what :func:`writes_in_place` -- ``/dev/null``, ``/dev/stdout``, a named pipe, a
+    process substitution's ``/dev/fd/N`` -- which is then written directly, never replaced. ``keep_hint`` is
+    added to the message about an existing file (another way to go on than ``--overwrite``).
+
+    Raises
+    ------
+    OutputError
+        If its folder does not exist, is not a folder or is not writable, if ``path`` is a folder, if ``path``
+        exists and ``overwrite`` is False, or if it is written in place and ``special_ok`` is False.
+    """
+    if str(path).endswith(("/", os.sep)):  # Path() drops the slash: 'out/' would be written as a file 'out'
+        raise OutputError(f"cannot write {what} '{path}': it names a folder; give a file name")
+    path = Path(path)
+    if writes_in_place(path):
+        if special_ok:
+            return path
+        raise OutputError(f"cannot write {what} '{path}': it is a device or stream, not a file; give a file name")
+    folder = path.parent
+    if not folder.exists():
+        raise OutputError(f"cannot write {what} '{path}': folder '{folder}' does not exist")
+    if not folder.is_dir():
+        raise OutputError(f"cannot write {what} '{path}': '{folder}' is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise OutputError(f"cannot write {what} '{path}': folder '{folder}' is not writable")
+    if path.is_dir():
+        raise OutputError(f"cannot write {what} '{path}': it is a folder")
+    if os.path.lexists(path) and not overwrite:  # a dangling link is a name taken too
+        raise OutputError(f"{what} '{path}' already exists; use --overwrite to replace it{keep_hint}")
+    return path
+
+
+def move_into_place(temp: Path, path: Path, *, overwrite: bool = False, what: str = "output") -> None:
+    """Rename the finished temporary file ``temp`` to ``path`` (same folder).
+
+    With ``overwrite`` an existing ``path`` is replaced. Without it the name is claimed only if still free: another
+    run writing the same name at the same time (``xargs -P`` over videos of one name in different folders, both
+    with ``--out-dir tracks``) passed :func:`check_output_path` too, and a plain rename would silently replace the
+    output of whichever finished first. The file is linked to its name, which fails if the name exists, and the
+    temporary name removed; on a file system without hard links the name is checked once more and renamed over.
+
+    Raises
+    ------
+    OutputError
+        If ``path`` exists and ``overwrite`` is False (``temp`` is left for the caller to delete).
+    OSError
+        If the rename fails otherwise.
+    """
+    if overwrite:
+        os.replace(temp, path)
+        return
+    taken = OutputError(f"{what} '{path}' already exists (written while this run went on); use --overwrite to "
+                        f"replace it")
+    try:
+        os.link(temp, path)
+    except FileExistsError:
+        raise taken from None
+    except OSError:
+        # No hard links here (FAT, exFAT, many network shares, which report it under several error numbers): the
+        # name is checked once more and renamed over, so that a finished output is never lost for want of a link.
+        if os.path.lexists(path):
+            raise taken from None
+        os.replace(temp, path)
+        return
+    with contextlib.suppress(OSError):  # the output is in place; a temporary name left behind is only clutter
+        temp.unlink()
+
+
+def writes_in_place(path) -> bool:
+    """Whether output to ``path`` goes straight into it, never through a temporary file renamed over it: a
+    device, pipe or socket, or any path under ``/dev`` or ``/proc`` (``/dev/stdout`` and ``/proc/self/fd/1``
+    are streams even when they lead to a regular file, and renaming over them would replace the link)."""
+    path = Path(path)
+    if str(path.absolute()).startswith(("/dev/", "/proc/")):
+        return True
+    return path.exists() and not path.is_file() and not path.is_dir()
+
+
+def make_output_folder(folder) -> list[Path]:
+    """Create ``folder`` and its missing parents; return the folders created, outermost first.
+
+    Raises
+    ------
+    OutputError
+        If a part of the path is a file, or the folder cannot be created (permissions, read-only file system).
+    """
+    folder = Path(folder)
+    missing = [p for p in [folder, *folder.parents] if not p.exists()][::-1]
+    blocking = next((p for p in [folder, *folder.parents] if p.exists() and not p.is_dir()), None)
+    if blocking is not None:
+        raise OutputError(f"cannot create output folder '{folder}': '{blocking}' is a file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create output folder '{folder}': {exc.strerror or exc}") from None
+    return missing
+
+
+def remove_empty_folders(folders) -> None:
+    """Remove those of ``folders`` that are empty, innermost first (undoing :func:`make_output_folder`)."""
+    for folder in sorted(map(Path, folders), key=lambda p: len(p.parts), reverse=True):
+        try:
+            folder.rmdir()
+        except OSError:  # not empty (another output went there), or already gone
+            pass
+
+
+@contextlib.contextmanager
+def written_into_place(path: Path, *, overwrite: bool = False, what: str = "output",
+                       temp: Path | None = None) -> Iterator[Path]:
+    """Yield a temporary name next to ``path`` to write; when the block ends normally, move it to ``path``.
+
+    ``temp`` (default :func:`temporary_path`) is deleted however the block ends: once moved into place it is
+    gone already, and after a failure or a stop signal nothing is left behind. ``what`` names the output in
+    messages ("output CSV", "plot").
+
+    Raises
+    ------
+    OutputError
+        If writing or moving fails with an :class:`OSError` ("cannot write output CSV 'x.csv': No space left
+        on device"), or ``path`` was taken meanwhile and ``overwrite`` is False (:func:`move_into_place`).
+    """
+    path = Path(path)
+    temp = temporary_path(path) if temp is None else temp
+    try:
+        yield temp
+        move_into_place(temp, path, overwrite=overwrite, what=what)
+    except OSError as exc:
+        raise OutputError(f"cannot write {what} '{path}': {exc.strerror or exc}") from None
+    finally:
+        temp.unlink(missing_ok=True)

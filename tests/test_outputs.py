@@ -1,0 +1,50 @@
+"""Output files: written under a temporary name and moved into place only when complete."""
+
+import errno
+
+import pytest
+
+from logpolar_track.errors import OutputError
+from logpolar_track.outputs import temporary_path, written_into_place
+
+
+def test_a_finished_output_is_moved_into_place_and_its_temporary_name_is_gone(tmp_path):
+    target = tmp_path / "run.csv"
+    with written_into_place(target, what="output CSV") as temp:
+        assert temp == temporary_path(target) and temp.parent == tmp_path
+        temp.write_text("frame\n")
+        assert not target.exists()
+    assert target.read_text() == "frame\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.csv"]
+
+
+def test_a_failed_or_stopped_output_leaves_nothing_and_its_error_goes_through(tmp_path):
+    target = tmp_path / "run.csv"
+    for error in (ValueError("bad row"), KeyboardInterrupt()):
+        with pytest.raises(type(error)):
+            with written_into_place(target) as temp:
+                temp.write_text("half")
+                raise error
+        assert list(tmp_path.iterdir()) == []
+
+
+def test_an_os_error_while_writing_is_one_output_error_naming_the_output(tmp_path):
+    target = tmp_path / "plot.png"
+    with pytest.raises(OutputError) as info:
+        with written_into_place(target, what="plot") as temp:
+            temp.write_text("half")
+            raise OSError(errno.ENOSPC, "No space left on device")
+    assert str(info.value) == f"cannot write plot '{target}': No space left on device"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_name_taken_meanwhile_is_kept_unless_overwriting(tmp_path):
+    target = tmp_path / "out.json"
+    with pytest.raises(OutputError, match="already exists .written while this run went on.; use --overwrite"):
+        with written_into_place(target, what="JSON output") as temp:
+            temp.write_text("new")
+            target.write_text("theirs")  # another run finished first
+    assert target.read_text() == "theirs" and sorted(p.name for p in tmp_path.iterdir()) == ["out.json"]
+    with written_into_place(target, overwrite=True, what="JSON output") as temp:
+        temp.write_text("new")
+    assert target.read_text() == "new" and sorted(p.name for p in tmp_path.iterdir()) == ["out.json"]

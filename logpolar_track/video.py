@@ -681,8 +681,8 @@ class VideoWriter:
         if not (math.isfinite(fps) and fps > 0):
             raise OutputError(f"cannot write output video '{wanted}': frame rate must be > 0, got {fps}")
         if fps < MIN_VIDEO_FPS:  # refused now, not after the whole run was tracked
-            raise OutputError(f"cannot write output video '{wanted}': {fps:g} frames/s is below the {MIN_VIDEO_FPS:g} the "
-                              f"video encoders take; give a higher --fps, or --no-video")
+            raise OutputError(f"cannot write output video '{wanted}': {fps:g} frames/s is below the "
+                              f"{MIN_VIDEO_FPS:g} the video encoders take; give a higher --fps, or --no-video")
         self.path = check_output_path(wanted, overwrite=overwrite, what="output video")
         self.wanted_path = self.path
         self.fps = float(fps)

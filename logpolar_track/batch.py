@@ -37,11 +37,8 @@ from .pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, mirror
 from .results import FORMATS, header_line
 from .trackers import tracker_class
 from .outputs import make_output_folder, remove_empty_folders, temporary_path
-from .video import CODECS_BY_EXTENSION, announced_frame_count, check_fps, frames_to_track, is_image_sequence, video_stem
-
-#: File extensions searched for in input folders (case-insensitive).
-VIDEO_EXTENSIONS: tuple[str, ...] = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".ts",
-                                     ".mts", ".m2ts", ".wmv", ".flv", ".3gp", ".ogv")
+from .video import (CODECS_BY_EXTENSION, VIDEO_EXTENSIONS, announced_frame_count, check_fps, frames_to_track,
+                    is_image_sequence, video_stem)
 
 #: Stem ending of lptrack's own annotated videos, which folder searches skip (``clip.lptrack.mp4``).
 OUTPUT_STEM_SUFFIX = Path(VIDEO_OUT_SUFFIX).stem

@@ -37,11 +37,11 @@ from .errors import InputError, UsageError, VideoError
 from .evaluate import GroundTruth, GroundTruthError, read_box_text, read_gt_csv, there_and_back_rows
 from .geometry import Ellipse
 from .pipeline import read_roi_sidecar
+from .video import VIDEO_EXTENSIONS
 
 #: Frame rate assumed for image sequences (OTB and VOT are mostly 30 fps captures), frames per second.
 IMAGE_FPS = 30.0
 IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff")
-VIDEO_EXTENSIONS = (".mp4", ".avi", ".mkv", ".mov", ".webm", ".m4v")
 #: How many folders below a dataset folder sequences are looked for (`discover`).
 SEARCH_DEPTH = 3
 

@@ -658,16 +658,33 @@ class Track:
 RUN_CSV_REQUIRED = ("frame", "cx", "cy", "a", "b", "angle_deg")
 
 
-def several_videos(path, names: list[str], wanted: str, extra: str = "") -> GroundTruthError:
-    """The error for a batch's stream (a ``video`` column) of several ``names`` where one video's run is needed:
-    ``wanted`` says what to do with one (``extra`` follows the list)."""
+def several_videos(path, names: list[str], verb: str, video=None) -> GroundTruthError:
+    """The error for a batch's stream (a ``video`` column) of several ``names`` where one video's run is needed
+    (``verb`` it: "score", "give"), none of them ``video`` if that was given."""
     shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
+    what = (f"choose one with --video VIDEO, or {verb} one video's run" if video is None
+            else f"none of them is '{video}'; {verb} one video's run")
     return GroundTruthError(f"run CSV '{path}' holds the rows of {len(names)} videos ({shown}: its 'video' "
-                            f"column){extra}; {wanted} (its own CSV, as --out-dir writes them)")
+                            f"column); {what} (its own CSV, as --out-dir writes them)")
 
 
-def read_track_csv(path) -> Track:
+def same_file(name: str, video) -> bool:
+    """Whether ``name`` (a batch stream's ``video`` value, the path as the run was given it) names the file
+    ``video``: the same path, or two paths to one file."""
+    a, b = Path(name), Path(video)
+    if a == b:
+        return True
+    try:
+        return a.exists() and b.exists() and a.samefile(b)
+    except OSError:
+        return False
+
+
+def read_track_csv(path, video=None) -> Track:
     """Read a run CSV (``frame,time_s,cx,cy,a,b,angle_deg,scale,rotation_deg,score,status``) as predictions.
+
+    A batch's stream (``lptrack run a.mp4 b.mp4 --csv -``, a leading ``video`` column) gives the rows of its only
+    video, or of the one whose ``video`` names the file ``video`` (a path).
 
     Empty, ``n/a`` or ``nan`` fields become NaN (e.g. ``rotation_deg`` of trackers that do not measure it);
     missing ``scale``/``score`` default to 1. Without a ``status`` column (or with it empty throughout: another
@@ -678,17 +695,21 @@ def read_track_csv(path) -> Track:
     ------
     GroundTruthError
         Unreadable file, missing columns, fields that are not numbers, frames that do not increase, the rows of
-        several videos (a batch's stream, with its ``video`` column), a ``status`` other than ``init``,
-        ``tracked`` and ``lost``, or a ``score`` outside [0, 1].
+        several videos (a batch's stream, with its ``video`` column) none of them ``video``, a ``status`` other
+        than ``init``, ``tracked`` and ``lost``, or a ``score`` outside [0, 1].
     """
     rows, header, lines = _read_csv_columns(path, RUN_CSV_REQUIRED, "run CSV")
     if not rows:
         raise GroundTruthError(f"run CSV '{path}' has no rows")
-    videos = list(dict.fromkeys(r.get("video") for r in rows)) if "video" in header else []
+    videos = list(dict.fromkeys(str(r.get("video")) for r in rows)) if "video" in header else []
     if len(videos) > 1:
-        # A batch's stream (``lptrack run a.mp4 b.mp4 --csv -``): its videos' frame numbers overlap, and the last
-        # video's rows were scored against the first one's ground truth.
-        raise several_videos(path, [str(v) for v in videos], "score one video's run")
+        # A batch's stream: its videos' frame numbers overlap, so one video's rows are scored, never all of them
+        # against the first one's ground truth.
+        chosen = None if video is None else next((name for name in videos if same_file(name, video)), None)
+        if chosen is None:
+            raise several_videos(path, videos, "score", video)
+        kept = [(line, row) for line, row in zip(lines, rows) if str(row.get("video")) == chosen]
+        lines, rows = [line for line, _ in kept], [row for _, row in kept]
     for line, row in zip(lines, rows):
         if None in row.values():  # a row cut short (a file copied while it was written, or cut with head -c)
             fields = sum(value is not None for value in row.values())

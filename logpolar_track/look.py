@@ -38,13 +38,13 @@ import numpy as np
 from .datasets import load_ground_truth
 from .draw import LOST_COLOUR, TRACKED_COLOUR, draw_state
 from .errors import FrameRangeError, OutputError, RoiError, UsageError, VideoError, counted
-from .evaluate import (GroundTruthError, Track, read_data_file, rotation_errors, scale_errors, score_track,
+from .evaluate import (GroundTruthError, Track, read_data_file, rotation_errors, same_file, scale_errors, score_track,
                        several_videos)
 from .geometry import Ellipse, check_roi_fits, ellipse_in_box
 from .results import COLUMNS, FrameResult, off_contract
 from .trackers.base import TrackState
 from .outputs import check_output_path, written_into_place
-from .video import VideoReader, guess_image_sequence, video_stem
+from .video import VIDEO_EXTENSIONS, VideoReader, guess_image_sequence, video_stem
 
 #: BGR colour of the grid lines drawn by :func:`draw_grid` (cyan: rare in natural images, legible on both
 #: dark and light backgrounds).
@@ -53,8 +53,6 @@ GRID_COLOUR = (255, 255, 0)
 ROI_COLOUR = (255, 0, 255)
 #: Default relative tolerance under which a fitted ellipse is reported as a circle: ``(a - b) / a``.
 ROUND_TOLERANCE = 0.02
-#: Extensions tried when looking for the video beside a run CSV (see :func:`find_video_for_csv`).
-VIDEO_EXTENSIONS = (".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm")
 #: Hint shown when matplotlib is missing.
 PLOT_HINT = "pip install matplotlib"
 
@@ -639,21 +637,10 @@ def _one_video(path: Path, header: list[str], body: list, video) -> tuple[list[s
     names = list(dict.fromkeys(row[0].strip() for _, row in body if row))
     chosen = names[0] if len(names) == 1 else None
     if chosen is None and video is not None:
-        chosen = next((name for name in names if _same_file(name, video)), None)
+        chosen = next((name for name in names if same_file(name, video)), None)
     if chosen is None:
-        raise several_videos(path, names, "give one video's run", "" if video is None else f", none of them '{video}'")
+        raise several_videos(path, names, "give", video)
     return header[1:], [(line, row[1:]) for line, row in body if row and row[0].strip() == chosen]
-
-
-def _same_file(name: str, video) -> bool:
-    """Whether a batch stream's ``video`` value ``name`` names the file ``video``."""
-    a, b = Path(name), Path(video)
-    if a == b:
-        return True
-    try:
-        return a.exists() and b.exists() and a.samefile(b)
-    except OSError:
-        return False
 
 
 def _as_table(run) -> RunTable:
@@ -719,7 +706,7 @@ def describe_video_search(csv_path, folders: Sequence = (".",)) -> str:
         folder, found = several[0]
         names = ", ".join(str(p.relative_to(folder)) for p in found)  # img/%04d.jpg for a sequence
         return f"{place(folder)} holds several videos it could be ({names})"
-    others = ", ".join(VIDEO_EXTENSIONS[1:])
+    others = ", ".join(VIDEO_EXTENSIONS[1:6]) + ", ..."
     return (f"no {stem}{VIDEO_EXTENSIONS[0]} (or {others}, or a folder {stem}/ of numbered images) in "
             f"{' or '.join(place(f) for f, _ in searched)}")
 

@@ -56,6 +56,11 @@ CODECS_BY_EXTENSION: dict[str, tuple[tuple[str, str], ...]] = {
     ".webm": (("VP80", ".webm"), ("MJPG", ".avi")),
 }
 
+#: File extensions taken for videos (case-insensitive), the commonest first: searched for in input folders, beside a
+#: run CSV (``lptrack plot``) and in sequence folders.
+VIDEO_EXTENSIONS: tuple[str, ...] = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".ts",
+                                     ".mts", ".m2ts", ".wmv", ".flv", ".3gp", ".ogv")
+
 _END = object()  # end-of-stream marker in the read-ahead queue
 
 

@@ -329,9 +329,10 @@ def test_read_run_csv_takes_one_video_of_a_batch_stream(tiny_run, tmp_path):
     chosen = read_run_csv(stream, video.path)
     assert list(chosen.frames) == list(alone.frames) and np.array_equal(chosen.ellipses, alone.ellipses)
     assert len(read_run_csv(stream, other)) == 4
-    with pytest.raises(GroundTruthError, match=r"holds the rows of 2 videos .*'video' column\); give one video's"):
+    with pytest.raises(GroundTruthError, match=r"holds the rows of 2 videos .*'video' column\); choose one with "
+                                               r"--video VIDEO, or give one video's"):
         read_run_csv(stream)
-    with pytest.raises(GroundTruthError, match="none of them 'elsewhere.mp4'"):
+    with pytest.raises(GroundTruthError, match="none of them is 'elsewhere.mp4'; give one video's run"):
         read_run_csv(stream, "elsewhere.mp4")
     single = tmp_path / "single.csv"
     single.write_text("\n".join(stream.read_text().splitlines()[:21]) + "\n")
@@ -394,6 +395,35 @@ def test_eval_refuses_a_batch_stream_of_several_videos(tiny_run, tmp_path):
     stream.write_text("\n".join([header] + rows + rows[1:]) + "\n")
     with pytest.raises(GroundTruthError, match=f"line {len(rows) + 2}: frame 1 does not follow frame {len(rows) - 1}"):
         read_track_csv(stream)
+
+
+def test_eval_scores_one_video_of_a_batch_stream(tiny_run, tmp_path, monkeypatch):
+    """``lptrack run a.mp4 b.mp4 --csv - > all.csv``: eval scores the video named by --video, or by GT when GT is
+    a video (its .gt.csv beside it), as its own run's CSV scores."""
+    video, run_csv, gt = tiny_run
+    for stem in ("tiny", "copy"):
+        (tmp_path / f"{stem}.mp4").write_bytes(video.path.read_bytes())
+        (tmp_path / f"{stem}.roi").write_text(video.roi.to_spec() + "\n")
+        (tmp_path / f"{stem}.gt.csv").write_text(gt.read_text())
+    (tmp_path / "copy.mp4").write_bytes((tmp_path / "copy.mp4").read_bytes()[:-1])  # another file, same frames
+    monkeypatch.chdir(tmp_path)
+    streamed = invoke("run", "tiny.mp4", "copy.mp4", "--tracker", "diffdecomp", "--no-video", "--csv", "-", "-q")
+    assert streamed.exit_code == 0, streamed.stderr
+    Path("all.csv").write_text(streamed.stdout)
+    alone = invoke("eval", str(run_csv), str(gt))
+    assert alone.exit_code == 0, alone.stderr
+    by_option = invoke("eval", "all.csv", "tiny.gt.csv", "--video", "tiny.mp4")
+    by_gt = invoke("eval", "all.csv", "tiny.mp4")
+    for result in (by_option, by_gt):
+        assert result.exit_code == 0, result.stderr
+        # The table's row, but for its first column (the CSV's name).
+        assert result.stdout.splitlines()[2].split()[1:] == alone.stdout.splitlines()[2].split()[1:]
+    refused = invoke("eval", "all.csv", "tiny.gt.csv")
+    assert refused.exit_code == 1 and refused.stderr == (
+        "lptrack: error: run CSV 'all.csv' holds the rows of 2 videos (tiny.mp4, copy.mp4: its 'video' column); "
+        "choose one with --video VIDEO, or score one video's run (its own CSV, as --out-dir writes them)\n")
+    elsewhere = invoke("eval", "all.csv", "tiny.gt.csv", "--video", "other.mp4")
+    assert elsewhere.exit_code == 1 and "none of them is 'other.mp4'; score one video's run" in elsewhere.stderr
 
 
 def test_json_lines_of_a_run_read_back_as_its_csv(tiny_run, tmp_path):
@@ -584,8 +614,8 @@ def test_plot_says_where_it_looked_when_it_finds_no_video(tiny_run, tmp_path, mo
     monkeypatch.chdir(tmp_path)
     result = invoke("plot", "runs/tiny.lptrack.csv", "-o", "p.png")
     assert result.exit_code == 0 and result.stdout == "p.png\n"
-    assert result.stderr == ("lptrack: note: no thumbnail: no tiny.mp4 (or .avi, .mov, .mkv, .m4v, .webm, or a folder "
-                             "tiny/ of numbered images) in 'runs' "
+    assert result.stderr == ("lptrack: note: no thumbnail: no tiny.mp4 (or .m4v, .mov, .avi, .mkv, .webm, ..., or a "
+                             "folder tiny/ of numbered images) in 'runs' "
                              "or the current folder; give the tracked video with --video VIDEO (or --no-video for "
                              "blank axes)\n")
     (tmp_path / "tiny.mp4").write_bytes(b"")

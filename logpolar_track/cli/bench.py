@@ -323,8 +323,12 @@ def _emit(table: str, doc: dict | None, json_out: str | None, overwrite: bool) -
 @click.argument("ground_truth", metavar="GT", type=click.Path(path_type=Path))
 @click.option("--json", "json_out", metavar="PATH|-", help="Write the metrics (and per-frame arrays) as JSON; "
                                                            "'-' for stdout instead of the table.")
+@click.option("--video", "video", type=click.Path(path_type=Path), metavar="VIDEO",
+              help="With a batch's stream (PRED.csv from 'lptrack run a.mp4 b.mp4 --csv -'): score the rows of "
+                   "this video. Default: GT when GT is a video.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing --json file.")
-def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, overwrite: bool) -> None:
+def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, video: Path | None,
+                 overwrite: bool) -> None:
     """Score a run's CSV (PRED.csv from 'lptrack run') against ground truth GT.
 
     GT is a <name>.gt.csv, an OTB groundtruth_rect.txt, a VOT groundtruth.txt,
@@ -338,10 +342,13 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, ove
     """
     from ..datasets import load_ground_truth
     from ..evaluate import read_track_csv, score_track
+    from ..video import VIDEO_EXTENSIONS
     _check_json_out(json_out, overwrite)
     _check_argument_order(prediction, ground_truth)
 
-    track = read_track_csv(prediction)
+    if video is None and ground_truth.suffix.lower() in VIDEO_EXTENSIONS:
+        video = ground_truth  # its rows, if PRED.csv is a batch's stream
+    track = read_track_csv(prediction, video)
     gt = load_ground_truth(ground_truth)
     metrics = score_track(gt, track)
     if metrics["frames_scored"] == 0:

@@ -562,6 +562,8 @@ def _read_csv_columns(path, required: tuple[str, ...], what: str) -> tuple[list[
     (:func:`read_data_file`) with the ``required`` columns."""
     path = Path(path)
     header, body = read_data_file(path, what)
+    if not header:
+        raise GroundTruthError(f"{what} '{path}' is empty; expected a header with {','.join(required)}")
     missing = [c for c in required if c not in header]
     if missing:
         raise GroundTruthError(f"{what} '{path}' lacks column(s) {', '.join(missing)}; expected a header "
@@ -581,16 +583,20 @@ def read_gt_csv(path) -> GroundTruth:
     Raises
     ------
     GroundTruthError
-        Unreadable file, missing columns, or fields that are not numbers.
+        Unreadable file, missing columns, fields that are not numbers, or a run's CSV (``lptrack run``'s).
     """
     rows, header, _ = _read_csv_columns(path, GT_CSV_COLUMNS[:6], "ground truth")
+    if {"time_s", "status"} <= set(header):
+        # It has every column a .gt.csv needs, and scored as one it gives a run's own guesses as the truth.
+        raise GroundTruthError(f"ground truth '{path}' is an lptrack run (its columns include time_s and status), "
+                               f"not ground truth")
     try:
         frames = [int(float(r["frame"])) for r in rows]
         values = np.array([[_float(r.get(c)) for c in GT_CSV_COLUMNS[1:]] for r in rows], float).reshape(-1, 7)
     except (TypeError, ValueError) as exc:
         raise GroundTruthError(f"ground truth '{path}' has a field that is not a number ({exc})") from None
     if not frames:
-        raise GroundTruthError(f"ground truth '{path}' has no rows")
+        raise GroundTruthError(f"ground truth '{path}' has a header but no rows")
     if min(frames) < 0:
         raise GroundTruthError(f"ground truth '{path}' has a negative frame number")
     n = max(frames) + 1
@@ -700,7 +706,7 @@ def read_track_csv(path, video=None) -> Track:
     """
     rows, header, lines = _read_csv_columns(path, RUN_CSV_REQUIRED, "run CSV")
     if not rows:
-        raise GroundTruthError(f"run CSV '{path}' has no rows")
+        raise GroundTruthError(f"run CSV '{path}' has a header but no rows")
     videos = list(dict.fromkeys(str(r.get("video")) for r in rows)) if "video" in header else []
     if len(videos) > 1:
         # A batch's stream: its videos' frame numbers overlap, so one video's rows are scored, never all of them

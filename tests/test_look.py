@@ -397,6 +397,22 @@ def test_eval_refuses_a_batch_stream_of_several_videos(tiny_run, tmp_path):
         read_track_csv(stream)
 
 
+def test_eval_plot_and_sheet_word_an_empty_run_csv_alike(tiny_run, tmp_path):
+    video, run_csv, gt = tiny_run
+    empty, header_only = tmp_path / "empty.csv", tmp_path / "header.csv"
+    empty.write_text("")
+    header_only.write_text(run_csv.read_text().splitlines()[0] + "\n")
+    for path, said in ((empty, "is empty; expected"), (header_only, "has a header but no rows")):
+        commands = [("eval", path, gt), ("sheet", video.path, path, "-o", tmp_path / "s.png")]
+        if _has_matplotlib():  # plot says first that it needs it
+            commands.append(("plot", path, "--no-video", "-o", tmp_path / "p.png"))
+        for args in commands:
+            result = invoke(*args)
+            assert result.exit_code == 1, args
+            assert result.stderr.startswith(f"lptrack: error: run CSV '{path}' {said}"), (args, result.stderr)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["empty.csv", "header.csv"]
+
+
 def test_eval_scores_one_video_of_a_batch_stream(tiny_run, tmp_path, monkeypatch):
     """``lptrack run a.mp4 b.mp4 --csv - > all.csv``: eval scores the video named by --video, or by GT when GT is
     a video (its .gt.csv beside it), as its own run's CSV scores."""
@@ -570,6 +586,18 @@ def test_plot_takes_a_sequence_folder_as_ground_truth_as_eval_does(tiny_run, tmp
     result = invoke("plot", run_csv, "-o", from_folder, "--gt", folder, "--no-video")
     assert result.exit_code == 0, result.stderr
     assert from_folder.read_bytes() == from_file.read_bytes()
+
+
+@needs_matplotlib
+def test_plot_refuses_a_run_given_as_ground_truth_as_eval_does(tiny_run, tmp_path):
+    """A run CSV has every column a .gt.csv needs; taken as one, it scored the run against itself (AUC 1)."""
+    _, run_csv, _ = tiny_run
+    out = tmp_path / "p.png"
+    result = invoke("plot", run_csv, "-o", out, "--gt", run_csv, "--no-video")
+    assert result.exit_code == 1 and result.stderr == (
+        f"lptrack: error: ground truth '{run_csv}' is an lptrack run (its columns include time_s and status), "
+        f"not ground truth\n")
+    assert not out.exists() and list(tmp_path.iterdir()) == []
 
 
 @needs_matplotlib

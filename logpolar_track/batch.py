@@ -29,7 +29,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import IO, Callable, Iterable, Mapping, Sequence
 
-from .errors import LptrackError, RoiError, UsageError
+from .errors import LptrackError, RoiError, UsageError, VideoError
 from .executor import TaskOutcome, run_tasks
 from .geometry import ROI_SYNTAX, Ellipse, parse_roi
 from .pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, mirrored_path, read_roi_sidecar,
@@ -37,8 +37,8 @@ from .pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, mirror
 from .results import FORMATS, header_line
 from .trackers import tracker_class
 from .outputs import make_output_folder, remove_empty_folders, temporary_path
-from .video import (CODECS_BY_EXTENSION, VIDEO_EXTENSIONS, announced_frame_count, check_fps, frames_to_track,
-                    is_image_sequence, video_stem)
+from .video import (CODECS_BY_EXTENSION, VIDEO_EXTENSIONS, VideoReader, announced_frame_count, check_fps,
+                    frames_to_track, is_image_sequence, video_stem)
 
 #: Stem ending of lptrack's own annotated videos, which folder searches skip (``clip.lptrack.mp4``).
 OUTPUT_STEM_SUFFIX = Path(VIDEO_OUT_SUFFIX).stem
@@ -257,14 +257,22 @@ def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None,
         else:
             add(VideoInput(path))
     # A shell's *.mp4 names lptrack's own annotated videos beside their sources: tracked again, they gave
-    # clip.lptrack.lptrack.mp4, one more each run. One named with no source among the inputs is tracked.
-    sources: dict[Path, Path] = {}  # each input's key without its extension -> the first input of that stem
+    # clip.lptrack.lptrack.mp4, one more each run. One named with no source among the inputs is tracked, unless its
+    # name holds its source's extension and that file is beside it.
+    # Each input's key without its extension -> the first input of that stem; and its key with it, the name an
+    # output takes where two videos share a stem (a.mp4 beside a.avi: a.mp4.lptrack.mp4).
+    sources: dict[Path, Path] = {}
     for video in found:
         sources.setdefault(video_key(video.path).with_suffix(""), video.path)
+    for video in found:
+        sources.setdefault(video_key(video.path), video.path)
     kept = []
     for video in found:
         stem = Path(video.path.stem)
         source = sources.get(video_key(video.path).parent / stem.stem)
+        named = video.path.with_name(stem.stem)  # a.avi for a.avi.lptrack.mp4, made beside a.mp4
+        if source is None and named.suffix.lower() in VIDEO_EXTENSIONS and named.is_file():
+            source = named  # *.mp4 names the output, not its source
         if stem.suffix == OUTPUT_STEM_SUFFIX and source is not None:
             if on_own_output is not None:
                 on_own_output(video.path, source)
@@ -453,7 +461,16 @@ def outputs_complete(video_out: Path | None, csv_out: Path | None, *, source: Pa
     if max_frames is not None:
         wanted = start_frame + max_frames - 1
         last_wanted = wanted if last_wanted is None else min(wanted, last_wanted)
-    return last_wanted is None or span[1] >= last_wanted
+    if last_wanted is None or span[1] >= last_wanted:
+        return True
+    # Short of it: a trial over fewer frames (--frames 5), or a video cut short or damaged at its end, whose run
+    # ended where its frames did (it was tracked again on every resumed batch). The frames up to the row after the
+    # last are decoded to tell.
+    try:
+        with VideoReader(source, start_frame=span[1] + 1):
+            return False
+    except VideoError:  # past the end (FrameRangeError), or that frame cannot be decoded
+        return True
 
 
 def _data_ends(path: Path) -> tuple[str | None, str, str] | None:

@@ -674,14 +674,16 @@ def several_videos(path, names: list[str], verb: str, video=None) -> GroundTruth
                             f"column); {what} (its own CSV, as --out-dir writes them)")
 
 
-def same_file(name: str, video) -> bool:
+def same_file(name: str, video, stream=None) -> bool:
     """Whether ``name`` (a batch stream's ``video`` value, the path as the run was given it) names the file
-    ``video``: the same path, or two paths to one file."""
+    ``video``: the same path, or two paths to one file, ``name`` taken from the current folder or, where it is
+    relative, from the folder of the file ``stream`` it came from (the run may have been started there)."""
     a, b = Path(name), Path(video)
     if a == b:
         return True
+    places = [a] if a.is_absolute() or stream is None or str(stream) == "-" else [a, Path(stream).parent / a]
     try:
-        return a.exists() and b.exists() and a.samefile(b)
+        return b.exists() and any(place.exists() and place.samefile(b) for place in places)
     except OSError:
         return False
 
@@ -711,7 +713,7 @@ def read_track_csv(path, video=None) -> Track:
     if len(videos) > 1:
         # A batch's stream: its videos' frame numbers overlap, so one video's rows are scored, never all of them
         # against the first one's ground truth.
-        chosen = None if video is None else next((name for name in videos if same_file(name, video)), None)
+        chosen = None if video is None else next((name for name in videos if same_file(name, video, path)), None)
         if chosen is None:
             raise several_videos(path, videos, "score", video)
         kept = [(line, row) for line, row in zip(lines, rows) if str(row.get("video")) == chosen]

@@ -637,7 +637,7 @@ def _one_video(path: Path, header: list[str], body: list, video) -> tuple[list[s
     names = list(dict.fromkeys(row[0].strip() for _, row in body if row))
     chosen = names[0] if len(names) == 1 else None
     if chosen is None and video is not None:
-        chosen = next((name for name in names if same_file(name, video)), None)
+        chosen = next((name for name in names if same_file(name, video, path)), None)
     if chosen is None:
         raise several_videos(path, names, "give", video)
     return header[1:], [(line, row[1:]) for line, row in body if row and row[0].strip() == chosen]

@@ -8,11 +8,15 @@ fails or is stopped never leaves a file that looks finished, and an existing out
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import os
 from pathlib import Path
 from typing import Iterator
 
 from .errors import OutputError
+
+#: Bytes in a file name most file systems take (ext4, XFS, APFS, NTFS's 255 UTF-16 units are more).
+_NAME_MAX = 255
 
 
 def temporary_path(path: Path, *, pid: int | None = None) -> Path:
@@ -21,7 +25,16 @@ def temporary_path(path: Path, *, pid: int | None = None) -> Path:
     ``out/run.mp4`` -> ``out/.run.<pid>.part.mp4``. The process id (this process's unless ``pid`` is given)
     keeps concurrent runs apart, and lets a parent find what a killed worker left.
     """
-    return path.with_name(f".{path.stem}.{os.getpid() if pid is None else pid}.part{path.suffix}")
+    tail = f".{os.getpid() if pid is None else pid}.part{path.suffix}"
+    name = f".{path.stem}{tail}"
+    if len(os.fsencode(name)) > _NAME_MAX:
+        # A name the file system takes (up to 255 bytes) would fail here for its 15 or so bytes more: the stem is cut
+        # short, a hash of it kept so that two long names cut alike stay apart.
+        digest = hashlib.sha1(os.fsencode(path.name)).hexdigest()[:8]
+        room = _NAME_MAX - len(os.fsencode(f".~{digest}{tail}"))
+        stem = os.fsencode(path.stem)[:room].decode(errors="ignore")  # not through a multi-byte character
+        name = f".{stem}~{digest}{tail}"
+    return path.with_name(name)
 
 
 def check_output_path(path, *, overwrite: bool = False, what: str = "output", special_ok: bool = False,

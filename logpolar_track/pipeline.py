@@ -374,9 +374,10 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
         planned.append((Path(csv_out), "output CSV"))
     inputs = [(video_path, "the input video")]
     inputs += [(roi, "the input's ROI file") for roi in roi_sidecar_paths(video_path)]
+    # --skip-existing keeps outputs in files; the rows on stdout are none (so it is refused with --csv -).
+    keep_hint = "" if str(csv_out) == "-" else " (or --skip-existing to keep a video's outputs and track the others)"
     for out, what in planned:
-        check_output_path(out, overwrite=overwrite, what=what, special_ok=what == "output CSV",
-                          keep_hint=" (or --skip-existing to keep a video's outputs and track the others)")
+        check_output_path(out, overwrite=overwrite, what=what, special_ok=what == "output CSV", keep_hint=keep_hint)
         for source, name in inputs:
             if out.exists() and source.exists() and out.resolve() == source.resolve():
                 raise OutputError(f"{what} '{out}' is {name}; choose another name")

@@ -138,8 +138,10 @@ def header_line(*, video: bool = False) -> str:
 def _csv_field(text: str) -> str:
     """``text`` as one CSV field (quoted only when it holds a comma, quote or line break)."""
     buffer = io.StringIO()
-    csv.writer(buffer, lineterminator="").writerow([text])
-    return buffer.getvalue()
+    # The csv module quotes a field holding its line terminator: with none, a line break went out unquoted and split
+    # the row (a path with a newline, as `find -print0 | lptrack run -` passes it).
+    csv.writer(buffer, lineterminator="\n").writerow([text])
+    return buffer.getvalue()[:-1]
 
 
 def _json_value(column: str, text: str):
@@ -166,9 +168,9 @@ def json_line(fields: list[str], *, video: str | None = None) -> str:
 def read_data_rows(path) -> tuple[list[str], list[tuple[int, list[str]]]]:
     """The header and the rows of a run's data file, as :class:`CsvWriter` writes it in either format.
 
-    A CSV file gives its header line and fields as written. A file of JSON lines (its first non-blank
-    character is ``{``) gives the first object's keys as the header and each line's values in that order as
-    text: ``null`` or a missing key as an empty field, numbers as Python prints them. Blank lines are skipped.
+    A CSV file gives its header line and fields as written. A file of JSON lines (its first non-blank character is
+    ``{``) gives the first object's keys as the header and each line's values in that order as text: ``null`` or a
+    missing key as an empty field, numbers as Python prints them. Blank lines are skipped. ``'-'`` reads stdin.
 
     Returns
     -------
@@ -184,8 +186,13 @@ def read_data_rows(path) -> tuple[list[str], list[tuple[int, list[str]]]]:
     ValueError
         A JSON line is not an object; the message gives its line number.
     """
-    with open(path, newline="", encoding="utf-8-sig") as fh:
-        text = fh.read()
+    if str(path) == "-":  # a pipe: lptrack run clip.mp4 --csv - | lptrack eval - clip.gt.csv
+        if sys.stdin is None:
+            raise OSError(errno.EBADF, "stdin is closed")
+        text = sys.stdin.buffer.read().decode("utf-8-sig")
+    else:
+        with open(path, newline="", encoding="utf-8-sig") as fh:
+            text = fh.read()
     if not text.lstrip().startswith("{"):
         rows = [(n, r) for n, r in enumerate(csv.reader(io.StringIO(text)), start=1) if any(f.strip() for f in r)]
         if not rows:
@@ -221,6 +228,10 @@ def stdout_errors():
         if reader_left(exc):
             raise BrokenPipeError(errno.EPIPE, "Broken pipe") from exc
         raise OutputError(f"cannot write the rows to stdout: {exc.strerror or exc}") from None
+    except UnicodeEncodeError as exc:  # a video's path in a batch's 'video' column, stdout set to latin-1
+        text = exc.object[exc.start:exc.end].encode("ascii", "backslashreplace").decode()
+        raise OutputError(f"cannot write the rows to stdout: its encoding ({exc.encoding}) has no '{text}'; "
+                          f"set PYTHONIOENCODING=utf-8") from None
 
 
 def reader_left(exc: OSError) -> bool:

@@ -434,6 +434,19 @@ def test_a_shell_glob_does_not_track_lptracks_own_videos_beside_their_sources(tm
     assert [v.path.name for v in find_videos([str(tmp_path / "clip.lptrack.mp4")])] == ["clip.lptrack.mp4"]
 
 
+def test_a_shell_glob_skips_the_annotated_videos_named_after_their_sources_file_name(tmp_path):
+    """a.mp4 beside a.avi gives a.mp4.lptrack.mp4 and a.avi.lptrack.mp4: ``*.mp4`` named them and they were tracked
+    again (a.mp4.lptrack.lptrack.csv), the second whose source a.avi the glob does not name, but which is beside it."""
+    for name in ("a.mp4", "a.avi", "a.mp4.lptrack.mp4", "a.avi.lptrack.mp4", "b.avi.lptrack.mp4"):
+        (tmp_path / name).touch()
+    dropped = []
+    found = find_videos([str(tmp_path / n) for n in ("a.mp4", "a.mp4.lptrack.mp4", "a.avi.lptrack.mp4",
+                                                      "b.avi.lptrack.mp4")],
+                        on_own_output=lambda out, source: dropped.append((out.name, source.name)))
+    assert [v.path.name for v in found] == ["a.mp4", "b.avi.lptrack.mp4"]  # b.avi is nowhere: tracked
+    assert dropped == [("a.mp4.lptrack.mp4", "a.mp4"), ("a.avi.lptrack.mp4", "a.avi")]
+
+
 def test_outputs_never_collide(work):
     shutil.copy(work / "footage/day2/c.avi", work / "footage/day2/a.avi")
     (work / "footage/day2/a.roi").write_text("80,60,20\n")
@@ -718,6 +731,68 @@ def test_skip_existing_redoes_a_trial_run_over_fewer_frames(work):
                    "--skip-existing")
     assert moved.exit_code == 0 and "2 ok" in moved.stderr
     assert csv_rows(work / "out/b.lptrack.csv")[0]["frame"] == "2"
+
+
+def test_skip_existing_skips_a_video_cut_short_whose_run_went_to_its_end(work):
+    """cut.avi announces 30 frames and ends after fewer: its run's outputs end there, and every resumed batch
+    tracked it again; a trial over fewer frames than it has is still redone."""
+    first = invoke("footage/day2/cut.avi", "--out-dir", "out", "--no-video", "--skip-existing")
+    rows = len(csv_rows(work / "out/cut.lptrack.csv"))
+    assert first.exit_code == 0 and 0 < rows < 30, first.stderr
+    again = invoke("footage/day2/cut.avi", "--out-dir", "out", "--no-video", "--skip-existing")
+    assert again.exit_code == 0 and again.stderr == "lptrack: cut.avi: outputs exist; skipped (--skip-existing)\n"
+    trial = invoke("footage/day2/cut.avi", "--out-dir", "out", "--no-video", "--overwrite", "--frames", "3")
+    assert trial.exit_code == 0 and len(csv_rows(work / "out/cut.lptrack.csv")) == 3
+    redone = invoke("footage/day2/cut.avi", "--out-dir", "out", "--no-video", "--skip-existing")
+    assert redone.exit_code == 0 and len(csv_rows(work / "out/cut.lptrack.csv")) == rows, redone.stderr
+
+
+def test_skip_existing_is_refused_with_rows_on_stdout_for_one_video_too(work):
+    """With one video, ``--csv - --skip-existing`` replaced the annotated video the hint said it would keep."""
+    assert invoke("footage/day1/a.mp4", "--csv", "out.csv", "--frames", "3").exit_code == 0
+    stamp = (work / "a.lptrack.mp4").stat().st_mtime_ns
+    refused = invoke("footage/day1/a.mp4", "--csv", "-", "--frames", "3")
+    assert refused.exit_code == 1 and "(or --skip-existing" not in refused.stderr
+    for videos in (["footage/day1/a.mp4"], ["footage/day1/a.mp4", "footage/day1/b.mp4"]):
+        result = invoke(*videos, "--csv", "-", "--skip-existing")
+        assert result.exit_code == 2 and result.stdout == ""
+        assert result.stderr == "lptrack: error: --skip-existing needs outputs in files; it cannot apply to --csv -\n"
+    assert (work / "a.lptrack.mp4").stat().st_mtime_ns == stamp
+
+
+def test_an_empty_name_is_refused_not_read_as_the_current_folder(work):
+    """``lptrack run "$VIDEO"`` with VIDEO unset tracked every video below the current folder."""
+    for args in ([""], ["footage/day1/a.mp4", "--csv", ""], ["footage/day1/a.mp4", "--out-dir", ""],
+                 ["footage/day1/a.mp4", "-o", ""]):
+        result = invoke(*args, "--no-video" if "-o" not in args else "--frames=2")
+        assert result.exit_code == 2, args
+        assert "an empty name was given (an unset shell variable?); give a file or folder name" in result.stderr
+        assert result.stderr.count("\n") == 1
+    assert sorted(p.name for p in work.iterdir()) == ["footage"]
+
+
+def test_a_path_with_a_line_break_is_one_quoted_field_of_the_stream(work):
+    """``find -print0 | lptrack run - --csv -``: a name holding a newline went out unquoted and split each row."""
+    odd = work / "footage/day1/new\nline.mp4"
+    shutil.copy(work / "footage/day1/a.mp4", odd)
+    (work / "footage/day1/new\nline.roi").write_text((work / "footage/day1/a.roi").read_text())
+    listing = f"{odd}\0{work / 'footage/day1/b.mp4'}\0"
+    result = invoke("-", "--no-video", "--csv", "-", "--frames", "3", stdin=listing)
+    assert result.exit_code == 0, result.stderr
+    rows = csv_rows(result.stdout)
+    assert [r["video"] for r in rows] == [str(odd)] * 3 + [str(work / "footage/day1/b.mp4")] * 3
+    assert [r["frame"] for r in rows] == ["0", "1", "2"] * 2
+
+
+def test_a_stream_stdout_cannot_encode_is_one_error_line(work, monkeypatch):
+    shutil.copy(work / "footage/day1/a.mp4", work / "footage/day1/视频.mp4")
+    shutil.copy(work / "footage/day1/a.roi", work / "footage/day1/视频.roi")
+    env = dict(os.environ, PYTHONIOENCODING="latin-1")
+    proc = subprocess.run([sys.executable, "-m", "logpolar_track", "run", "footage/day1", "--no-video", "--csv", "-",
+                           "--frames", "2", "-q"], capture_output=True, env=env, cwd=work)
+    assert proc.returncode == 1
+    assert proc.stderr.decode() == ("lptrack: error: cannot write the rows to stdout: its encoding (latin-1) has no "
+                                    "'\\u89c6\\u9891'; set PYTHONIOENCODING=utf-8\n")
 
 
 def test_data_frame_span_reads_csv_and_json_lines(tmp_path):

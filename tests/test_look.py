@@ -442,6 +442,57 @@ def test_eval_scores_one_video_of_a_batch_stream(tiny_run, tmp_path, monkeypatch
     assert elsewhere.exit_code == 1 and "none of them is 'other.mp4'; score one video's run" in elsewhere.stderr
 
 
+def test_eval_plot_and_sheet_read_the_run_from_stdin_as_dash(tiny_run, tmp_path, monkeypatch):
+    """``lptrack run clip.mp4 --csv - | lptrack eval - clip.gt.csv``: '-' was taken for a file of that name."""
+    video, run_csv, gt = tiny_run
+    text = run_csv.read_text()
+    monkeypatch.chdir(tmp_path)
+
+    def piped(*args):
+        return CliRunner().invoke(main, [str(a) for a in args], input=text, catch_exceptions=False)
+
+    from_file, from_stdin = invoke("eval", run_csv, gt), piped("eval", "-", gt)
+    assert from_stdin.exit_code == 0, from_stdin.stderr
+    assert from_stdin.stdout.splitlines()[2].split()[1:] == from_file.stdout.splitlines()[2].split()[1:]
+    sheet = piped("sheet", video.path, "-", "-o", "s.png")
+    assert sheet.exit_code == 0 and sheet.stdout == "s.png\n" and (tmp_path / "s.png").is_file()
+    unnamed = piped("sheet", video.path, "-")
+    assert unnamed.exit_code == 2 and unnamed.stderr == ("lptrack: error: the run comes from stdin ('-'), which "
+                                                         "names no PNG: give one with -o, e.g. -o sheet.png\n")
+    if _has_matplotlib():
+        plot = piped("plot", "-", "-o", "p.png")
+        assert plot.exit_code == 0 and (tmp_path / "p.png").is_file()
+        assert plot.stderr.startswith("lptrack: note: no thumbnail: the run came from stdin; give the tracked video")
+    assert sorted(p.name for p in tmp_path.iterdir()) == (["p.png"] if _has_matplotlib() else []) + ["s.png"]
+
+
+def test_a_streams_video_names_are_found_from_the_folder_of_the_stream_too(tiny_run, tmp_path, monkeypatch):
+    """A batch run from one folder names its videos from there; plot, sheet and eval run from another matched them
+    against the current folder only ("none of them is '../vids/b.mp4'")."""
+    video, run_csv, gt = tiny_run
+    (tmp_path / "vids").mkdir()
+    (tmp_path / "runs").mkdir()
+    shutil.copy(video.path, tmp_path / "vids/tiny.mp4")
+    header, *rows = run_csv.read_text().splitlines()
+    stream = tmp_path / "runs/all.csv"
+    stream.write_text("\n".join(["video," + header] + [f"../vids/tiny.mp4,{r}" for r in rows]
+                                + [f"../vids/other.mp4,{r}" for r in rows]) + "\n")
+    monkeypatch.chdir(tmp_path)
+    result = invoke("eval", "runs/all.csv", gt, "--video", "vids/tiny.mp4")
+    assert result.exit_code == 0, result.stderr
+    assert len(read_run_csv("runs/all.csv", "vids/tiny.mp4")) == len(rows)
+    sheet = invoke("sheet", "vids/tiny.mp4", "runs/all.csv", "-o", "s.png")
+    assert sheet.exit_code == 0, sheet.stderr
+
+
+def test_a_number_option_given_text_says_a_whole_number_is_wanted(tiny_run):
+    video, run_csv, _ = tiny_run
+    result = invoke("sheet", video.path, run_csv, "--count", "x")
+    assert result.exit_code == 2 and result.stderr == ("lptrack: error: Invalid value for '--count': 'x' is not a "
+                                                       "whole number; give one from 1 to 4096 (see 'lptrack sheet "
+                                                       "--help')\n")
+
+
 def test_json_lines_of_a_run_read_back_as_its_csv(tiny_run, tmp_path):
     """What ``run --format jsonl`` writes, ``plot``, ``sheet`` and ``eval`` read as the CSV."""
     video, run_csv, _ = tiny_run

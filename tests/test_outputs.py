@@ -1,6 +1,7 @@
 """Output files: written under a temporary name and moved into place only when complete."""
 
 import errno
+import os
 
 import pytest
 
@@ -48,3 +49,17 @@ def test_a_name_taken_meanwhile_is_kept_unless_overwriting(tmp_path):
     with written_into_place(target, overwrite=True, what="JSON output") as temp:
         temp.write_text("new")
     assert target.read_text() == "new" and sorted(p.name for p in tmp_path.iterdir()) == ["out.json"]
+
+
+def test_the_temporary_name_of_a_long_name_fits_the_file_system(tmp_path):
+    """A 248-byte name is legal; its temporary name, 13 bytes longer, failed ("File name too long")."""
+    for stem in ("v" * 236, "视" * 78):
+        target = tmp_path / f"{stem}.lptrack.csv"
+        temp = temporary_path(target)
+        assert len(temp.name.encode()) <= 255 and temp.name.startswith(".") and temp.name.endswith(".part.csv")
+        assert temporary_path(target.with_name("w" + target.name)) != temp  # cut alike, kept apart
+        with written_into_place(target) as temp:
+            temp.write_text("frame\n")
+        assert target.read_text() == "frame\n" and sorted(p.name for p in tmp_path.iterdir()) == [target.name]
+        target.unlink()
+    assert temporary_path(tmp_path / "run.csv").name == f".run.{os.getpid()}.part.csv"  # short names as before

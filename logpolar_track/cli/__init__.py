@@ -255,6 +255,32 @@ class FrameRate(click.ParamType):
         return rate
 
 
+class PathParam(click.Path):
+    """A file or folder name, as :class:`click.Path`, that is never empty: ``Path('')`` is the current folder, so
+    ``lptrack run "$VIDEO"`` with an unset variable tracked every video below it."""
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and not value:
+            self.fail("an empty name was given (an unset shell variable?); give a file or folder name", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+class WholeNumber(click.IntRange):
+    """A whole number within bounds, as :class:`click.IntRange`, whose message for text that is not one says so
+    (click's says "'abc' is not a valid integer range")."""
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str):
+            try:
+                int(value.strip())
+            except ValueError:
+                low, high = self.min, self.max
+                bounds = (f" from {low} to {high}" if low is not None and high is not None
+                          else f" >= {low}" if low is not None else f" <= {high}" if high is not None else "")
+                self.fail(f"'{value}' is not a whole number; give one{bounds}", param, ctx)
+        return super().convert(value, param, ctx)
+
+
 def check_jobs_or_scheduler(jobs_given: bool, scheduler: str | None) -> None:
     """``--jobs`` and ``--scheduler`` contradict each other: the cluster's workers, not local processes, run the
     work (``run`` and ``bench`` take one or the other)."""

@@ -15,8 +15,8 @@ from ..errors import UsageError
 from ..executor import TRACKING_OPENCV_THREADS
 from ..look import PLOT_SUFFIXES, check_image_suffix
 from ..outputs import check_output_path
-from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, check_jobs_or_scheduler, main, parse_param_options,
-               require_stdout, write_stdout)
+from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, PathParam, WholeNumber, check_jobs_or_scheduler, main,
+               parse_param_options, require_stdout, write_stdout)
 
 
 #: Skipped folders named one by one before the rest are counted (a dataset laid out otherwise, UAV123's images
@@ -67,24 +67,24 @@ Examples:
 
 @main.command("bench", cls=OneLineErrors, epilog=_BENCH_EPILOG)
 @click.option("--dataset", "datasets", multiple=True, metavar="DIR",
-              type=click.Path(path_type=Path),
+              type=PathParam(path_type=Path),
               help="Folder of sequences (repeatable). Default: sample_videos/ of the project.")
 @click.option("--trackers", metavar="A,B,...",
               help="Comma-separated tracker names. Default: every available lptrack tracker and OpenCV peer.")
 @click.option("--param", "params", multiple=True, metavar="NAME=VALUE", help=PARAM_HELP)
-@click.option("--json", "json_out", metavar="PATH|-",
+@click.option("--json", "json_out", metavar="PATH|-", type=PathParam(),
               help="Write every number, versions, machine and parameters as JSON; '-' for stdout (then the "
                    "table goes to stderr).")
 @click.option("--per-frame", is_flag=True, help="Include per-frame IoU and centre error arrays in the --json "
               "file (with --starts, those of the first start: the ground truth's ROI).")
-@click.option("--plot", "plot_out", metavar="PATH.png", type=click.Path(dir_okay=False, path_type=Path),
+@click.option("--plot", "plot_out", metavar="PATH.png", type=PathParam(dir_okay=False, path_type=Path),
               help="Save success and precision plots (needs matplotlib: pip install matplotlib).")
-@click.option("--jobs", "-j", type=click.IntRange(min=1), default=1, show_default=True, metavar="N",
+@click.option("--jobs", "-j", type=WholeNumber(min=1), default=1, show_default=True, metavar="N",
               help="Run (sequence, tracker) pairs in N processes. Speeds are only comparable at equal N.")
 @click.option("--scheduler", metavar="ADDRESS",
               help="Run the pairs on this Dask scheduler instead (pip install 'dask[distributed]'; the sequences "
                    "at the same paths on its workers).")
-@click.option("--starts", type=click.IntRange(min=1, max=len(STARTS)), default=1, show_default=True, metavar="N",
+@click.option("--starts", type=WholeNumber(min=1, max=len(STARTS)), default=1, show_default=True, metavar="N",
               help=f"Track each sequence from N initial ROIs: the ground truth's, then OTB's spatial robustness "
                    f"(SRE) ones: shifted by 10 % of the box (4 to the sides, 4 to the corners), scaled by 0.8, "
                    f"0.9, 1.1, 1.2; from the 14th on, fixed random ones (shifts within 8 %, scales 0.9 to 1.1; at "
@@ -94,18 +94,18 @@ Examples:
               help="Play each sequence backwards instead, from its last frame with ground truth (image sequences "
                    "only; rows named NAME-backwards): the same footage as other tracking problems, a check on "
                    "sequences a tracker was not tuned on.")
-@click.option("--every", type=click.IntRange(min=1), default=1, show_default=True, metavar="N",
+@click.option("--every", type=WholeNumber(min=1), default=1, show_default=True, metavar="N",
               help="Track every N-th frame only, from the tracker's first frame (the first with ground truth, or "
                    "frame 0 with a .roi sidecar; rows named NAME-everyN): the same footage at 1/N of its frame rate, "
                    "N times the motion between frames. With --backwards: every N-th frame of the sequence played "
                    "backwards.")
-@click.option("--passes", type=click.IntRange(min=1), default=1, show_default=True, metavar="N",
+@click.option("--passes", type=WholeNumber(min=1), default=1, show_default=True, metavar="N",
               help="Play each sequence forwards and backwards in turn, N passes over its frames (2: there and back; "
                    "image sequences only; rows named NAME-passesN), each frame scored against its own ground truth, "
                    "the same on every pass: a long run over known footage, where a tracker that drifts scores less "
                    "pass after pass (each tracker's mean AUC per pass below the table, and per sequence in --json). "
                    "With --backwards or --every: of the sequence so played.")
-@click.option("--threads", type=click.IntRange(min=1), default=None, metavar="N",
+@click.option("--threads", type=WholeNumber(min=1), default=None, metavar="N",
               help="OpenCV threads per tracker. Default 1: every tracker, lptrack's and OpenCV's, on one core, so "
                    "frames/s compare per core (more lets OpenCV's CSRT spread its work over cores).")
 @click.option("--speed", is_flag=True,
@@ -319,11 +319,11 @@ def _emit(table: str, doc: dict | None, json_out: str | None, overwrite: bool) -
 
 
 @main.command("eval", cls=OneLineErrors)
-@click.argument("prediction", metavar="PRED.csv", type=click.Path(path_type=Path))
-@click.argument("ground_truth", metavar="GT", type=click.Path(path_type=Path))
-@click.option("--json", "json_out", metavar="PATH|-", help="Write the metrics (and per-frame arrays) as JSON; "
-                                                           "'-' for stdout instead of the table.")
-@click.option("--video", "video", type=click.Path(path_type=Path), metavar="VIDEO",
+@click.argument("prediction", metavar="PRED.csv", type=PathParam(path_type=Path))
+@click.argument("ground_truth", metavar="GT", type=PathParam(path_type=Path))
+@click.option("--json", "json_out", metavar="PATH|-", type=PathParam(),
+              help="Write the metrics (and per-frame arrays) as JSON; '-' for stdout instead of the table.")
+@click.option("--video", "video", type=PathParam(path_type=Path), metavar="VIDEO",
               help="With a batch's stream (PRED.csv from 'lptrack run a.mp4 b.mp4 --csv -'): score the rows of "
                    "this video. Default: GT when GT is a video.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing --json file.")

@@ -17,15 +17,19 @@ from ..look import (PLOT_SUFFIXES, ROUND_TOLERANCE, SHEET_ROWS, check_image_suff
                     find_video_for_csv, matplotlib_hint, plot_track, read_frame, read_run_csv, roi_from_box,
                     roi_from_points, write_contact_sheet, write_frame_png)
 from ..video import input_label
-from . import FrameRate, OneLineErrors, main, parse_roi_option, require_stdout, write_stdout
+from . import FrameRate, OneLineErrors, PathParam, WholeNumber, main, parse_roi_option, require_stdout, write_stdout
 
 
-def _run_stem(csv_path: Path) -> str:
-    """``clip.lptrack.csv`` -> ``clip.lptrack``: the stem default outputs of plot and sheet are named after."""
-    return csv_path.stem
+def _default_png(csv_path: Path, out_png: Path | None, kind: str) -> Path:
+    """``out_png``, or the default output of plot and sheet: ``clip.lptrack.csv`` -> ``clip.lptrack.<kind>.png``."""
+    if out_png is not None:
+        return out_png
+    if str(csv_path) == "-":
+        raise UsageError(f"the run comes from stdin ('-'), which names no PNG: give one with -o, e.g. -o {kind}.png")
+    return Path(f"{csv_path.stem}.{kind}.png")
 
 
-_VIDEO = click.Path(dir_okay=True, path_type=Path)
+_VIDEO = PathParam(dir_okay=True, path_type=Path)
 
 
 @main.command("frame", cls=OneLineErrors, epilog="""\b
@@ -38,10 +42,10 @@ Examples:
 @click.argument("video", type=_VIDEO)
 @click.option("--at", "index", type=int, metavar="N", help="Frame index, 0 = first frame of the file. Default 0.")
 @click.option("--time", "time_s", type=float, metavar="SECONDS", help="Instead of --at: the frame at this time.")
-@click.option("-o", "--out", "out_png", type=click.Path(dir_okay=False, path_type=Path), metavar="PNG",
+@click.option("-o", "--out", "out_png", type=PathParam(dir_okay=False, path_type=Path), metavar="PNG",
               help="PNG to write. Default: <video stem>.frame<N>.png in the current folder "
                    "(with --roi: <video stem>.frame<N>.roi_<spec>.png).")
-@click.option("--grid", type=click.IntRange(min=0), default=50, show_default=True, metavar="PX",
+@click.option("--grid", type=WholeNumber(min=0), default=50, show_default=True, metavar="PX",
               help="Grid line spacing in pixels; 0 for no grid.")
 @click.option("--roi", "roi_spec", metavar="SPEC",
               help="Draw this candidate ROI: 'cx,cy,r' or 'cx,cy,a,b,angle' (pixels; degrees CCW).")
@@ -83,7 +87,7 @@ Examples:
   lptrack run clip.mp4 --roi "$(lptrack roi clip.mp4 --from-box 280,200,120,60)"
 """)
 @click.argument("video", type=_VIDEO)
-@click.option("--at", "index", type=click.IntRange(min=0), default=0, show_default=True, metavar="N",
+@click.option("--at", "index", type=WholeNumber(min=0), default=0, show_default=True, metavar="N",
               help="Frame the coordinates refer to (the ROI is checked against its size).")
 @click.option("--from-box", "box", metavar="X,Y,W,H",
               help="Axis-aligned box: top-left corner and size in pixels; gives the inscribed ellipse.")
@@ -125,10 +129,10 @@ Examples:
   lptrack plot clip.lptrack.csv --video clip.mp4 -o track.png
   lptrack plot spin.lptrack.csv --video sample_videos/spin.mp4 --gt sample_videos/spin.gt.csv
 """)
-@click.argument("run_csv", type=click.Path(dir_okay=False, path_type=Path), metavar="RUN.csv")
-@click.option("-o", "--out", "out_png", type=click.Path(dir_okay=False, path_type=Path), metavar="PNG",
+@click.argument("run_csv", type=PathParam(dir_okay=False, path_type=Path), metavar="RUN.csv")
+@click.option("-o", "--out", "out_png", type=PathParam(dir_okay=False, path_type=Path), metavar="PNG",
               help="Figure to write: .png, or .pdf or .svg. Default: <RUN stem>.plot.png in the current folder.")
-@click.option("--gt", "gt_path", type=click.Path(path_type=Path), metavar="GT",
+@click.option("--gt", "gt_path", type=PathParam(path_type=Path), metavar="GT",
               help="Ground truth to overlay and score: lptrack .gt.csv, OTB/UAV123 x,y,w,h .txt, VOT "
                    "groundtruth.txt, or a sequence folder holding one (as 'lptrack eval').")
 @click.option("--video", "video", type=_VIDEO, metavar="VIDEO", help="The tracked video, for the thumbnail.")
@@ -154,16 +158,19 @@ def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path 
         raise UsageError(hint)
     if no_video and video is not None:
         raise UsageError("--video and --no-video contradict each other; give one of them")
+    out_png = _default_png(run_csv, out_png, "plot")
     table = read_run_csv(run_csv, video)
     note = None
-    if video is None and not no_video:
+    if video is None and not no_video and str(run_csv) == "-":
+        note = ("lptrack: note: no thumbnail: the run came from stdin; give the tracked video with --video VIDEO (or "
+                "--no-video for blank axes)")
+    elif video is None and not no_video:
         video = find_video_for_csv(run_csv)
         if video is not None:
             note = f"lptrack: thumbnail from '{video}' (give --video to choose another)"
         else:
             note = (f"lptrack: note: no thumbnail: {describe_video_search(run_csv)}; give the tracked video with "
                     f"--video VIDEO (or --no-video for blank axes)")
-    out_png = out_png or Path(f"{_run_stem(run_csv)}.plot.png")
     path = plot_track(table, out_png, video=video, ground_truth=gt_path, overwrite=overwrite)
     if note is not None and not quiet:
         click.echo(note, err=True)  # after the plot, so that a failure is one error line, not a note before it
@@ -176,15 +183,15 @@ Examples:
   lptrack sheet clip.mp4 clip.lptrack.csv --count 20 --cols 5 --width 2000
 """)
 @click.argument("video", type=_VIDEO)
-@click.argument("run_csv", type=click.Path(dir_okay=False, path_type=Path), metavar="RUN.csv")
-@click.option("-o", "--out", "out_png", type=click.Path(dir_okay=False, path_type=Path), metavar="PNG",
+@click.argument("run_csv", type=PathParam(dir_okay=False, path_type=Path), metavar="RUN.csv")
+@click.option("-o", "--out", "out_png", type=PathParam(dir_okay=False, path_type=Path), metavar="PNG",
               help="PNG to write. Default: <RUN stem>.sheet.png in the current folder.")
-@click.option("--cols", type=click.IntRange(min=1, max=64), default=4, show_default=True, help="Columns.")
-@click.option("--rows", type=click.IntRange(min=1, max=64), default=None, metavar="N",
+@click.option("--cols", type=WholeNumber(min=1, max=64), default=4, show_default=True, help="Columns.")
+@click.option("--rows", type=WholeNumber(min=1, max=64), default=None, metavar="N",
               help=f"Rows: --cols x N frames. Default {SHEET_ROWS}; not with --count.")
-@click.option("--count", type=click.IntRange(min=1, max=4096), metavar="N",
+@click.option("--count", type=WholeNumber(min=1, max=4096), metavar="N",
               help="Instead of --rows: N frames in --cols columns (rows as needed).")
-@click.option("--width", type=click.IntRange(min=64, max=20000), default=1600, show_default=True, metavar="PX",
+@click.option("--width", type=WholeNumber(min=64, max=20000), default=1600, show_default=True, metavar="PX",
               help="Sheet width in pixels (tiles are never enlarged beyond the video's size).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing PNG.")
 def sheet(video: Path, run_csv: Path, out_png: Path | None, cols: int, rows: int | None, count: int | None,
@@ -200,8 +207,8 @@ def sheet(video: Path, run_csv: Path, out_png: Path | None, cols: int, rows: int
     if rows is not None and count is not None:
         raise UsageError(f"--rows and --count contradict each other: --rows {rows} shows {cols} x {rows} frames, "
                          f"--count {count} shows {count} frames in {cols} columns; give one of them")
+    out_png = _default_png(run_csv, out_png, "sheet")
     table = read_run_csv(run_csv, video)
-    out_png = out_png or Path(f"{_run_stem(run_csv)}.sheet.png")
     path = write_contact_sheet(video, table, out_png, cols=cols, rows=rows, count=count, width=width,
                                overwrite=overwrite)
     write_stdout(str(path) + "\n")

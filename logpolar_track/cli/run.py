@@ -27,8 +27,8 @@ from ..trackers import tracker_class, tracker_names
 from ..trackers.base import did_you_mean
 from ..outputs import make_output_folder, remove_empty_folders
 from ..video import check_fps, guess_image_sequence, input_label
-from . import (EXIT_FAILURE, PARAM_HELP, FrameRate, OneLineErrors, check_jobs_or_scheduler, main,
-               parse_param_options, parse_roi_option, stdout_reader_left)
+from . import (EXIT_FAILURE, PARAM_HELP, FrameRate, OneLineErrors, PathParam, WholeNumber, check_jobs_or_scheduler,
+               main, parse_param_options, parse_roi_option, stdout_reader_left)
 
 
 class RunCommand(OneLineErrors):
@@ -129,30 +129,30 @@ Examples:
 
 
 @main.command("run", cls=RunCommand)
-@click.argument("videos", nargs=-1, metavar="VIDEO...")
+@click.argument("videos", nargs=-1, metavar="VIDEO...", type=PathParam())
 @click.option("--roi", "roi_spec", metavar="SPEC",
               help="Object on the start frame: 'cx,cy,r' or 'cx,cy,a,b,angle' (pixels; degrees CCW). "
                    "Default: the video's .roi sidecar.")
-@click.option("--roi-file", type=click.Path(path_type=Path), metavar="CSV",
+@click.option("--roi-file", type=PathParam(path_type=Path), metavar="CSV",
               help="ROIs per video: lines 'video,roi[,start_frame][,tracker]' (paths relative to the file). "
                    "With no VIDEO, its videos are the inputs.")
 @click.option("--tracker", type=TrackerChoice(), default=DEFAULT_TRACKER, show_default=True, metavar="NAME",
               help="Tracking method (see the list below).")
 @click.option("--param", "params", multiple=True, metavar="NAME=VALUE", help=PARAM_HELP)
-@click.option("--start-frame", type=click.IntRange(min=0), default=0, show_default=True, metavar="N",
+@click.option("--start-frame", type=WholeNumber(min=0), default=0, show_default=True, metavar="N",
               help="Frame index (0 = first) the ROI refers to; tracking starts there.")
-@click.option("--frames", "max_frames", type=click.IntRange(min=1), default=None, metavar="N",
+@click.option("--frames", "max_frames", type=WholeNumber(min=1), default=None, metavar="N",
               help="Track N frames (the start frame included), then stop. Default: to the end of the video.")
 @click.option("--fps", type=FrameRate(), default=None, metavar="RATE",
               help="Frames per second of the input, for time_s and the annotated video, as FFmpeg's -framerate: "
                    "an image sequence's (it has none: 25 is assumed), or instead of a video's own.")
-@click.option("--out", "-o", "video_out", type=click.Path(path_type=Path), metavar="VIDEO_OUT",
+@click.option("--out", "-o", "video_out", type=PathParam(path_type=Path), metavar="VIDEO_OUT",
               help=f"Annotated video to write (one input only). Default: <video stem>{VIDEO_OUT_SUFFIX}. "
                    f"Extension .mp4/.m4v/.mov (mp4v), .avi (MJPG), .mkv or .webm; falls back to MJPG .avi.")
-@click.option("--csv", "csv_out", metavar="CSV_OUT",
+@click.option("--csv", "csv_out", metavar="CSV_OUT", type=PathParam(),
               help=f"Per-frame CSV to write (one input only), or '-' for stdout (then nothing else goes to "
                    f"stdout). Default: <video stem>{CSV_OUT_SUFFIX}.")
-@click.option("--out-dir", type=click.Path(path_type=Path), metavar="DIR",
+@click.option("--out-dir", type=PathParam(path_type=Path), metavar="DIR",
               help="Folder for the outputs lptrack names (created if needed), mirroring the inputs' folders; "
                    "--out and --csv paths are used as given. Default: the current folder.")
 @click.option("--parents", is_flag=True,
@@ -167,7 +167,7 @@ Examples:
 @click.option("--skip-existing", is_flag=True,
               help="Leave alone videos whose outputs all exist and cover the frames asked for from the same ROI; "
                    "redo (replace) the others (resumes an interrupted batch).")
-@click.option("--jobs", "-j", type=click.IntRange(min=1), default=None, metavar="N",
+@click.option("--jobs", "-j", type=WholeNumber(min=1), default=None, metavar="N",
               help="Videos tracked in parallel processes. Default: the number of cores.")
 @click.option("--scheduler", metavar="ADDRESS",
               help="Run the videos on this Dask scheduler (e.g. tcp://10.0.0.5:8786) instead; needs "
@@ -209,6 +209,9 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
         raise UsageError("--overwrite and --skip-existing contradict each other; give one of them")
     check_jobs_or_scheduler(jobs is not None, scheduler)
     check_fps(fps)
+    if skip_existing and csv_out == "-":
+        # The rows on stdout are no output to keep: with one video the annotated video was replaced regardless.
+        raise UsageError("--skip-existing needs outputs in files; it cannot apply to --csv -")
     if not videos and roi_file is None:
         raise UsageError("give a VIDEO (a file, a folder, or '-' for paths on stdin), or --roi-file "
                          "(see 'lptrack run --help')")
@@ -245,8 +248,6 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     stream = csv_out == "-"
     if stream and sys.stdout is None:
         raise OutputError("cannot write the rows to stdout: it is closed")
-    if stream and skip_existing:
-        raise UsageError("--skip-existing needs outputs in files; it cannot apply to --csv -")
     if not videos and not entries:  # without VIDEO arguments the ROI file's videos are the inputs
         raise UsageError(f"no videos found in ROI file '{roi_file}': write one line per video, "
                          f"video,roi[,start_frame][,tracker]")
@@ -356,9 +357,8 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
         csv_out = str(default_csv.with_suffix(FORMATS[data_format]))
     show = not quiet
     label = input_label(video)
-    if skip_existing and csv_out != "-" and outputs_complete(None if no_video else Path(video_out), Path(csv_out),
-                                                             source=video, start_frame=start_frame,
-                                                             max_frames=max_frames, roi=roi):
+    if skip_existing and outputs_complete(None if no_video else Path(video_out), Path(csv_out), source=video,
+                                          start_frame=start_frame, max_frames=max_frames, roi=roi):
         if show:
             click.echo(f"lptrack: {label}: outputs exist; skipped (--skip-existing)", err=True)
         return

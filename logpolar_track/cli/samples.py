@@ -9,11 +9,11 @@ import click
 
 from ..errors import OutputError
 from ..samples import DEFAULT_SEED, SAMPLE_NAMES, PhotoSources, build_scene, write_readme, write_sample
-from . import OneLineErrors, main, require_stdout, write_stdout
+from . import OneLineErrors, PathParam, main, require_stdout, write_stdout
 
 
 @main.command("samples", cls=OneLineErrors)
-@click.argument("out_dir", type=click.Path(file_okay=False, path_type=Path))
+@click.argument("out_dir", type=PathParam(file_okay=False, path_type=Path))
 @click.option("--only", "only", multiple=True, type=click.Choice(SAMPLE_NAMES), metavar="NAME",
               help=f"Generate only this sample (repeatable): {', '.join(SAMPLE_NAMES)}. "
                    "README.md is rewritten only when every sample is generated.")

@@ -329,7 +329,7 @@ def _emit(table: str, doc: dict | None, json_out: str | None, overwrite: bool) -
 @click.option("--overwrite", is_flag=True, help="Replace an existing --json file.")
 def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, video: Path | None,
                  overwrite: bool) -> None:
-    """Score a run's CSV (PRED.csv from 'lptrack run') against ground truth GT.
+    """Score a run's CSV (PRED.csv from 'lptrack run'; '-': stdin) against ground truth GT.
 
     GT is a <name>.gt.csv, an OTB groundtruth_rect.txt, a VOT groundtruth.txt,
     a UAV123 <name>.txt, a sequence folder holding one of them, or a video

@@ -118,16 +118,18 @@ def roi(video: Path, index: int, box: str | None, points: str | None, round_tol:
 
 @main.command("plot", cls=OneLineErrors, epilog="""\b
 The run CSV does not name its video: the thumbnail comes from --video, or
-from <stem>.mp4 (.avi, .mov, .mkv, .m4v, .webm), or a folder <stem>/ of
-numbered images, when exactly one such source sits next to the CSV (or in
-the current folder), where <stem> is the CSV's name without .lptrack.csv
+from <stem>.mp4 (.m4v, .mov, .avi, .mkv, .webm, ...), or a folder <stem>/
+of numbered images, when exactly one such source sits next to the CSV (or
+in the current folder), where <stem> is the CSV's name without .lptrack.csv
 (.lptrack.jsonl, .csv). A note on stderr says which video was taken, or
-where none was found. --no-video draws the path on blank axes.
+where none was found. --no-video draws the path on blank axes. RUN.csv '-'
+reads the run from stdin (then give -o).
 
 \b
 Examples:
   lptrack plot clip.lptrack.csv --video clip.mp4 -o track.png
   lptrack plot spin.lptrack.csv --video sample_videos/spin.mp4 --gt sample_videos/spin.gt.csv
+  lptrack run clip.mp4 --csv - | lptrack plot - --video clip.mp4 -o track.png
 """)
 @click.argument("run_csv", type=PathParam(dir_okay=False, path_type=Path), metavar="RUN.csv")
 @click.option("-o", "--out", "out_png", type=PathParam(dir_okay=False, path_type=Path), metavar="PNG",
@@ -181,6 +183,7 @@ def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path 
 Examples:
   lptrack sheet clip.mp4 clip.lptrack.csv                 # 4 x 3 frames
   lptrack sheet clip.mp4 clip.lptrack.csv --count 20 --cols 5 --width 2000
+  lptrack run clip.mp4 --csv - | lptrack sheet clip.mp4 - -o sheet.png  # '-': stdin
 """)
 @click.argument("video", type=_VIDEO)
 @click.argument("run_csv", type=PathParam(dir_okay=False, path_type=Path), metavar="RUN.csv")

@@ -358,10 +358,10 @@ def sequences_in(folder: Path) -> list[Sequence]:
 def discover(path, unread: list[tuple[Path, str]] | None = None) -> list[Sequence]:
     """Every sequence in ``path``: a sequence folder, a folder of sequence folders, or a sample video.
 
-    Sub-folders are searched (up to three levels) only where a folder holds no sequence itself. Results are
-    in natural order of their paths. A folder that holds frames or ground truth but is not a sequence lptrack
-    reads (OTB's ``img/`` without its ``groundtruth_rect.txt``, say) is skipped; ``unread``, if given, gets
-    ``(folder, what it lacks)`` for each.
+    Sub-folders are searched (up to three levels) except below an image sequence's folder. Results are in
+    natural order of their paths. A folder that holds frames or ground truth but is not a sequence lptrack reads
+    (OTB's ``img/`` without its ``groundtruth_rect.txt``, say), or a video without its ``.gt.csv`` beside videos with
+    theirs, is skipped; ``unread``, if given, gets ``(folder or video, what it lacks)`` for each.
 
     Raises
     ------
@@ -384,8 +384,15 @@ def discover(path, unread: list[tuple[Path, str]] | None = None) -> list[Sequenc
 
 def _discover(folder: Path, depth: int, unread: list[tuple[Path, str]]) -> list[Sequence]:
     found = sequences_in(folder)
+    if found and found[0].frame_files is not None:
+        return found  # an image sequence's folder: what is below it are its frames
     if found:
-        return found
+        # Videos with their ground truth, as lptrack samples writes them: those without are said to be skipped, and
+        # the folders beside them searched, as 'lptrack run' searches a folder.
+        lacking = [p for p in sorted(folder.iterdir(), key=_natural_key)
+                   if p.suffix.lower() in VIDEO_EXTENSIONS and p.is_file() and p not in {s.path for s in found}]
+        unread.extend((video, f"no {video.name[:-len(video.suffix)]}.gt.csv ground truth beside it")
+                      for video in lacking)
     if depth > 0:
         for sub in sorted((p for p in folder.iterdir()
                            if p.is_dir() and not p.name.startswith(".") and p.name not in _FRAME_FOLDERS),

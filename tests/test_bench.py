@@ -6,6 +6,7 @@ import json
 import math
 import os
 import pickle
+import shutil
 import signal
 import subprocess
 import sys
@@ -512,6 +513,22 @@ def test_bench_notes_ground_truth_out_of_step_with_its_images(tmp_path):
     assert res.exit_code == 2 and res.stdout == ""
     assert res.stderr.splitlines() == ["lptrack: error: --every 100 leaves 1 frame of 'walk-every100', nothing to "
                                        "track; give a smaller N"]
+
+
+def test_bench_finds_sample_videos_below_others_and_says_which_lack_ground_truth(dataset, tmp_path):
+    """A folder of sample videos ended the search there: a video without its .gt.csv beside them was skipped without
+    a word, and the sequences in a folder below them were not found."""
+    for name in ("alpha.avi", "alpha.gt.csv", "alpha.roi"):
+        shutil.copy(dataset / name, tmp_path / name)
+    shutil.copy(dataset / "alpha.avi", tmp_path / "nogt.avi")
+    (tmp_path / "deeper").mkdir()
+    for name in ("beta.avi", "beta.gt.csv", "beta.roi"):
+        shutil.copy(dataset / name, tmp_path / "deeper" / name)
+    res = _run("bench", "--dataset", tmp_path, "--trackers", "fixed")
+    assert res.exit_code == 0, res.stderr
+    assert [line for line in res.stderr.splitlines() if line.startswith("lptrack: note:")] == [
+        f"lptrack: note: skipped '{tmp_path / 'nogt.avi'}', which has no nogt.gt.csv ground truth beside it"]
+    assert [line.split()[0] for line in res.stdout.splitlines()[2:4]] == ["alpha", "beta"]
 
 
 def test_bench_says_which_folders_it_skipped_and_why(tmp_path):

@@ -197,7 +197,8 @@ def video_key(path) -> Path:
 
 def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None,
                 on_duplicate: Callable[[Path], None] | None = None,
-                on_own_output: Callable[[Path, Path], None] | None = None) -> list[VideoInput]:
+                on_own_output: Callable[[Path, Path], None] | None = None,
+                on_link_passed: Callable[[Path, bool], None] | None = None) -> list[VideoInput]:
     """The videos named by ``inputs``, in order, each once.
 
     Parameters
@@ -216,6 +217,9 @@ def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None,
     on_own_output : callable, optional
         Called with ``(output, source)`` for each video dropped as lptrack's own annotated video of another input
         (``clip.lptrack.mp4`` beside ``clip.mp4``, as a shell's ``*.mp4`` names both).
+    on_link_passed : callable, optional
+        Called with ``(link, to_folder)`` for each symbolic link a folder search passes by: to a folder (not
+        searched, as ``find`` does not follow links), or, named as a video, to nothing.
 
     Raises
     ------
@@ -252,8 +256,15 @@ def find_videos(inputs: Iterable[str], *, stdin: IO[str] | None = None,
             continue
         path = Path(text)
         if path.is_dir():
-            for video in sorted(p for p in path.rglob("*") if p.is_file() and is_video_name(p.relative_to(path))):
-                add(VideoInput(video, root=path))
+            for entry in sorted(path.rglob("*")):
+                name = entry.relative_to(path)
+                if entry.is_file():
+                    if is_video_name(name):
+                        add(VideoInput(entry, root=path))
+                elif (on_link_passed is not None and entry.is_symlink()
+                      and not any(part.startswith(".") for part in name.parts)
+                      and (entry.is_dir() or name.suffix.lower() in VIDEO_EXTENSIONS)):
+                    on_link_passed(entry, entry.is_dir())
         else:
             add(VideoInput(path))
     # A shell's *.mp4 names lptrack's own annotated videos beside their sources: tracked again, they gave

@@ -447,6 +447,24 @@ def test_a_shell_glob_skips_the_annotated_videos_named_after_their_sources_file_
     assert dropped == [("a.mp4.lptrack.mp4", "a.mp4"), ("a.avi.lptrack.mp4", "a.avi")]
 
 
+def test_a_folder_search_says_which_links_it_passes_by(tmp_path):
+    """A link to a folder is not followed (as find does not) and a link to nothing is no video: both were passed
+    by without a word."""
+    (tmp_path / "real").mkdir()
+    (tmp_path / "real/a.mp4").touch()
+    (tmp_path / "links").mkdir()
+    (tmp_path / "links/b.mp4").touch()
+    (tmp_path / "links/sub").symlink_to(tmp_path / "real")
+    (tmp_path / "links/gone.mp4").symlink_to(tmp_path / "nothing.mp4")
+    (tmp_path / "links/notes.txt").symlink_to(tmp_path / "nothing.txt")  # not named as a video: not said
+    passed = []
+    found = find_videos([str(tmp_path / "links")], on_link_passed=lambda link, folder: passed.append((link.name,
+                                                                                                        folder)))
+    assert [v.path.name for v in found] == ["b.mp4"]
+    assert passed == [("gone.mp4", False), ("sub", True)]
+    assert [v.path.name for v in find_videos([str(tmp_path / "links/sub")])] == ["a.mp4"]  # named, it is searched
+
+
 def test_outputs_never_collide(work):
     shutil.copy(work / "footage/day2/c.avi", work / "footage/day2/a.avi")
     (work / "footage/day2/a.roi").write_text("80,60,20\n")

@@ -261,7 +261,13 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
             click.echo(f"lptrack: note: skipping '{path}': lptrack's annotated video of '{source}' (name it "
                        f"without its source to track it)", err=True)
 
-    inputs = find_videos(videos, on_duplicate=named_again, on_own_output=own_output)
+    def link_passed(link: Path, to_folder: bool) -> None:
+        if not quiet:
+            why = ("a link to a folder, which folder searches do not follow (as find does not); name it to search it"
+                   if to_folder else "a link to nothing")
+            click.echo(f"lptrack: note: skipping '{link}': {why}", err=True)
+
+    inputs = find_videos(videos, on_duplicate=named_again, on_own_output=own_output, on_link_passed=link_passed)
     if videos and not inputs:
         folders = [Path(v) for v in videos if v != "-" and Path(v).is_dir()]
         why = ""

@@ -418,12 +418,20 @@ def _data_suffix(data_format: str) -> str:
 def _relative_names(videos: list[VideoInput]) -> list[Path]:
     """Each input's path relative to its root folder; loose files relative to their common folder. Where several
     root folders are given, each one's inputs are named under its folder's name (``day1/cam.mp4``,
-    ``day2/cam.mp4`` for ``day1 day2``), as ``cp -r day1 day2 out`` copies them."""
+    ``day2/cam.mp4`` for ``day1 day2``), as ``cp -r day1 day2 out`` copies them, and under as many folders above as
+    tell apart two of the same name (``day1/cams/cam.mp4``, ``day2/cams/cam.mp4`` for ``day1/cams day2/cams``)."""
     loose = [video_key(v.path).parent for v in videos if v.root is None]
     common = Path(os.path.commonpath(loose)) if loose else None
-    several = len({v.root for v in videos if v.root is not None}) > 1
-    # The folder's own name, however it was given ('.', '..', 'day1/'): never a step out of --out-dir.
-    return [(Path(Path(os.path.abspath(v.root)).name) if several else Path()) / v.path.relative_to(v.root)
+    # Each root folder's names from the top (never the root itself, which would make a name absolute).
+    roots = {v.root: Path(os.path.abspath(v.root)) for v in videos if v.root is not None}
+    parts = {root: path.relative_to(path.anchor).parts for root, path in roots.items()}
+    # The folder's own name, however it was given ('.', '..', 'day1/'): never a step out of --out-dir. Where two
+    # share it (day1/cams and day2/cams), as many of the folders above as tell them apart (day1/cams, day2/cams).
+    distinct, depth = set(roots.values()), 1
+    while (len({p[-depth:] for root, p in parts.items()}) < len(distinct)
+           and depth < max(len(p) for p in parts.values())):
+        depth += 1
+    return [(Path(*parts[v.root][-depth:]) if len(distinct) > 1 else Path()) / v.path.relative_to(v.root)
             if v.root is not None else video_key(v.path).relative_to(common) for v in videos]
 
 

@@ -465,6 +465,22 @@ def test_a_folder_search_says_which_links_it_passes_by(tmp_path):
     assert [v.path.name for v in find_videos([str(tmp_path / "links/sub")])] == ["a.mp4"]  # named, it is searched
 
 
+def test_folders_of_one_name_are_told_apart_by_the_folders_above_them(work):
+    """``run d4/day1/cams d4/day2/cams``: both were named 'cams', the second video failed on the first's outputs and
+    the first took a name with its extension; each is now mirrored under as many folders as tell them apart."""
+    for day in ("day1", "day2"):
+        (work / "d4" / day / "cams").mkdir(parents=True)
+        shutil.copy(work / "footage/day1/a.mp4", work / "d4" / day / "cams/cam.mp4")
+        shutil.copy(work / "footage/day1/a.roi", work / "d4" / day / "cams/cam.roi")
+    result = invoke("d4/day1/cams", "d4/day2/cams", "footage/day2", "--out-dir", "out", "--no-video", "--frames", "2")
+    assert "2 failed" not in result.stderr
+    assert files_under(work / "out") == ["day1/cams/cam.lptrack.csv", "day2/cams/cam.lptrack.csv",
+                                         "footage/day2/c.lptrack.csv", "footage/day2/cut.lptrack.csv"]
+    one = invoke("d4/day1/cams", "footage/day1", "--out-dir", "one", "--no-video", "--frames", "2")
+    assert one.exit_code == 0 and files_under(work / "one") == ["cams/cam.lptrack.csv", "day1/a.lptrack.csv",
+                                                                 "day1/b.lptrack.csv"]
+
+
 def test_outputs_never_collide(work):
     shutil.copy(work / "footage/day2/c.avi", work / "footage/day2/a.avi")
     (work / "footage/day2/a.roi").write_text("80,60,20\n")
@@ -487,12 +503,15 @@ def test_outputs_never_collide(work):
     assert outputs["footage/day1/a.mp4"] == "footage/day1/a.lptrack.csv"
     assert outputs["footage/day1/b.mp4"] == "footage/day1/b.lptrack.csv"
     assert outputs["again/day1/a.mp4"] == "again/day1/a.lptrack.csv"
-    # ... and folders of one name too: the second cannot have the first's outputs.
+    # ... and folders of one name too, under as many folders above them as tell them apart (the second failed, as
+    # it would overwrite the first's outputs).
     (work / "more/footage/day1").mkdir(parents=True)
     shutil.copy(work / "footage/day1/a.mp4", work / "more/footage/day1/a.mp4")
     plan = plan_batch(find_videos(["footage", "more/footage"]), roi=Ellipse.circle(80, 60, 20), out_dir="out")
-    assert plan.settled["more/footage/day1/a.mp4"].status == "failed"
-    assert "would overwrite those of 'footage/day1/a.mp4'" in plan.settled["more/footage/day1/a.mp4"].reason
+    assert not plan.settled
+    outputs = {j.label: str(j.csv_out.relative_to(work / "out")) for j in plan.jobs}
+    assert outputs["footage/day1/a.mp4"] == f"{work.name}/footage/day1/a.lptrack.csv"
+    assert outputs["more/footage/day1/a.mp4"] == "more/footage/day1/a.lptrack.csv"
 
 
 def test_parents_names_outputs_alike_however_the_videos_are_split_between_runs(work):

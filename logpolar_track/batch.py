@@ -428,7 +428,7 @@ def _relative_names(videos: list[VideoInput]) -> list[Path]:
     # The folder's own name, however it was given ('.', '..', 'day1/'): never a step out of --out-dir. Where two
     # share it (day1/cams and day2/cams), as many of the folders above as tell them apart (day1/cams, day2/cams).
     distinct, depth = set(roots.values()), 1
-    while (len({p[-depth:] for root, p in parts.items()}) < len(distinct)
+    while (len({p[-depth:] for p in parts.values()}) < len(distinct)
            and depth < max(len(p) for p in parts.values())):
         depth += 1
     return [(Path(*parts[v.root][-depth:]) if len(distinct) > 1 else Path()) / v.path.relative_to(v.root)

@@ -191,7 +191,7 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
     Returns
     -------
     dict
-        ``sequence``, ``tracker``, ``start``, ``frames`` (decoded), ``updates`` (frames passed to ``update``),
+        ``sequence``, ``tracker``, ``start``, ``updates`` (frames passed to ``update``),
         ``lost_frames`` (updates reported lost, with ground truth or not; ``lost_rate`` is the share of the scored
         frames), ``update_time_s``, ``fps`` (updates per second of update time), ``error`` (None, or
         the message of an exception that stopped the run; then the numbers cover the frames before it), and
@@ -234,7 +234,7 @@ def run_one(sequence: Sequence, tracker_name: str, params: Mapping | None = None
     table = np.array(rows, float).reshape(-1, 9)
     track = Track(table[:, 0].astype(int), table[:, 1:6], table[:, 6], table[:, 7], table[:, 8], statuses)
     result = {"sequence": sequence.name, "tracker": tracker_name, "start": start,
-              "frames": len(rows) + sequence.start, "updates": updates, "lost_frames": lost,
+              "updates": updates, "lost_frames": lost,
               "update_time_s": update_time, "fps": updates / update_time if update_time > 0 else math.nan,
               "error": error}
     result.update(score_track(sequence.gt, track))

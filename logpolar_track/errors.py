@@ -47,6 +47,12 @@ class UsageError(LptrackError, ValueError):
     exit_code = 2
 
 
+class NotStartedError(UsageError, RuntimeError):
+    """A tracker was asked to update before it was started (``update`` before ``init``)."""
+
+    exit_code = 2
+
+
 class FrameRangeError(VideoError, UsageError):
     """A frame index or time given as an argument lies outside the video (bad usage for this video)."""
 

@@ -56,13 +56,14 @@ All metric functions are pure functions of numpy arrays.
 from __future__ import annotations
 
 import math
+import numbers
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .errors import LptrackError
+from .errors import LptrackError, UsageError
 from .geometry import Ellipse, ellipse_in_rotated_rect
 from .results import off_contract
 
@@ -792,8 +793,10 @@ def success_curve(ious: np.ndarray, thresholds: np.ndarray = IOU_THRESHOLDS) -> 
 
 
 def auc(curve: np.ndarray) -> float:
-    """Area under a success curve sampled at evenly spaced thresholds on [0, 1]: OTB's mean of the samples."""
-    return float(np.mean(curve))
+    """Area under a success curve sampled at evenly spaced thresholds on [0, 1]: OTB's mean of the samples (NaN
+    for an empty curve)."""
+    curve = np.asarray(curve, float)
+    return float(np.mean(curve)) if curve.size else math.nan
 
 
 def precision_curve(errors_px: np.ndarray, thresholds: np.ndarray = PRECISION_THRESHOLDS) -> np.ndarray:
@@ -805,8 +808,12 @@ def precision_curve(errors_px: np.ndarray, thresholds: np.ndarray = PRECISION_TH
 
 
 def scale_errors(pred_scale: np.ndarray, gt_scale: np.ndarray) -> np.ndarray:
-    """Scale error per frame in percent: ``100 * |pred / gt - 1|`` (scales relative to a common frame)."""
-    return 100.0 * np.abs(np.asarray(pred_scale, float) / np.asarray(gt_scale, float) - 1.0)
+    """Scale error per frame in percent: ``100 * |pred / gt - 1|`` (scales relative to a common frame); NaN where
+    the ground truth's scale is not > 0."""
+    gt = np.asarray(gt_scale, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        errors = 100.0 * np.abs(np.asarray(pred_scale, float) / gt - 1.0)
+    return np.where(gt > 0, errors, np.nan)
 
 
 def rotation_errors(pred_deg: np.ndarray, gt_deg: np.ndarray, period: float = 360.0,
@@ -824,7 +831,14 @@ def rotation_errors(pred_deg: np.ndarray, gt_deg: np.ndarray, period: float = 36
         With ``period == 360``, True compares the cumulative angles directly (a missed full turn costs 360);
         False compares directions (error in [0, 180]). With any smaller period the error is the distance
         modulo ``period``, in [0, period / 2].
+
+    Raises
+    ------
+    UsageError
+        ``period`` is not a number > 0.
     """
+    if not (isinstance(period, numbers.Real) and not isinstance(period, bool) and 0 < period < math.inf):
+        raise UsageError(f"period must be a number of degrees > 0 (360, 180), got {period!r}")
     d = np.asarray(pred_deg, float) - np.asarray(gt_deg, float)
     if unwrapped and period >= 360.0:
         return np.abs(d)

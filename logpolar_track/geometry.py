@@ -14,6 +14,7 @@ This module needs no OpenCV.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,6 +54,16 @@ class Ellipse:
     angle_deg: float = 0.0
 
     def __post_init__(self) -> None:
+        values = (self.cx, self.cy, self.a, self.b, self.angle_deg)
+        if not all(type(value) is float for value in values):
+            # Plain floats, whatever numbers were given (a detector's float32, ints): what a tracker's states carry
+            # back to the caller, and what json.dumps takes. Not a bool, a 1-element array or a text.
+            if not all(isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+                       for value in values):
+                raise RoiError(f"an ellipse needs numbers (pixels and degrees), got cx, cy, a, b, angle_deg = "
+                               f"{', '.join(repr(value) for value in values)}")
+            for name, value in zip(("cx", "cy", "a", "b", "angle_deg"), values):
+                object.__setattr__(self, name, float(value))
         # Chained comparisons rather than math.isfinite: NaN fails them too, and trackers build an ellipse every
         # frame (this adds about 0.1 us to the 0.6 us of the dataclass's own __init__).
         if not (0.0 < self.a < _INF and 0.0 < self.b < _INF and -_INF < self.cx < _INF and -_INF < self.cy < _INF

@@ -26,6 +26,7 @@ subclasses; they never print.
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import warnings
 from dataclasses import dataclass
@@ -144,10 +145,15 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None, f
         raise UsageError("give a frame index or a time, not both")
     path = Path(path)
     if time_s is not None:
-        if not (math.isfinite(time_s) and time_s >= 0):
-            raise UsageError(f"time must be a number of seconds >= 0, got {time_s}")
+        if not (isinstance(time_s, numbers.Real) and not isinstance(time_s, bool) and math.isfinite(time_s)
+                and time_s >= 0):
+            raise UsageError(f"time must be a number of seconds >= 0, got {time_s!r}")
         return _frame_at_time(path, time_s, fps)
-    index = 0 if index is None else int(index)
+    if index is None:
+        index = 0
+    elif not isinstance(index, numbers.Integral) or isinstance(index, bool):  # 1.5 was frame 1, '3' frame 3
+        raise UsageError(f"frame index must be a whole number >= 0, got {index!r}")
+    index = int(index)
     if index < 0:
         raise UsageError(f"frame index must be >= 0, got {index}")
     try:
@@ -441,7 +447,8 @@ def roi_from_points(points, *, round_tolerance: float = ROUND_TOLERANCE) -> Elli
     Parameters
     ----------
     points : str or array-like
-        ``"x1,y1,x2,y2,..."`` or an ``(n, 2)`` array of (x, y) pixels on the outline, spread around it.
+        ``"x1,y1,x2,y2,..."`` or an ``(n, 2)`` array of (x, y) pixels on the outline, spread around it (or an
+        OpenCV contour, ``(n, 1, 2)``).
     round_tolerance : float
         Fits whose semi-axes differ by at most this fraction of the larger are reported as a circle
         (radius of equal area); 0 keeps the ellipse.
@@ -454,7 +461,8 @@ def roi_from_points(points, *, round_tolerance: float = ROUND_TOLERANCE) -> Elli
     Raises
     ------
     RoiError
-        An odd count of numbers, fewer than 3 distinct points, all points on a line, or no ellipse fits.
+        An odd count of numbers, an array of another shape, a point not finite, fewer than 3 distinct points, all
+        points on a line, or no ellipse fits.
 
     Notes
     -----
@@ -468,11 +476,24 @@ def roi_from_points(points, *, round_tolerance: float = ROUND_TOLERANCE) -> Elli
     the version. Points covering only a short arc of the outline give an unreliable ellipse: spread them
     around the whole object.
     """
-    values = _parse_numbers(points, "points") if isinstance(points, str) else \
-        [float(v) for v in np.asarray(points, float).ravel()]
-    if len(values) % 2:
-        raise RoiError(f"points give {len(values)} numbers; expected pairs x1,y1,x2,y2,... (pixels)")
-    given = np.asarray(values, float).reshape(-1, 2)
+    if isinstance(points, str):
+        values = _parse_numbers(points, "points")
+        if len(values) % 2:
+            raise RoiError(f"points give {len(values)} numbers; expected pairs x1,y1,x2,y2,... (pixels)")
+        given = np.asarray(values, float).reshape(-1, 2)
+    else:
+        try:
+            given = np.asarray(points, float)
+        except (TypeError, ValueError):
+            raise RoiError("points must be numbers: an (n, 2) array of (x, y) pixels") from None
+        if given.ndim == 3 and given.shape[1] == 1:  # OpenCV's contours, (n, 1, 2)
+            given = given[:, 0]
+        if given.ndim != 2 or given.shape[1] != 2:
+            # A (2, n) array (xs and ys) read as pairs gave a wrong ellipse without a word.
+            raise RoiError(f"points must be an (n, 2) array of (x, y) pixels (or OpenCV's (n, 1, 2)), got shape "
+                           f"{given.shape}")
+        if not np.isfinite(given).all():
+            raise RoiError("points must be finite numbers (pixels); some are NaN or infinite")
     # A point given twice adds nothing to the outline: 5 points of which 3 differ determine a circle, not the
     # arbitrary ellipse through 3 points that the ellipse fit returned.
     pts = np.unique(given, axis=0)

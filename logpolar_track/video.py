@@ -361,6 +361,9 @@ class VideoReader:
     """
 
     def __init__(self, path, *, start_frame: int = 0, read_ahead: int = 1, fps: float | None = None):
+        if not isinstance(path, (str, os.PathLike)):  # a camera's index (0), bytes: a TypeError from Path before
+            raise UsageError(f"a video is given by its file's path (str or Path), got {path!r}; lptrack reads files "
+                             f"and image sequences, not cameras")
         self.path = Path(path)
         check_frame_number(start_frame, "start frame")
         check_fps(fps)

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
 
+from logpolar_track.errors import UsageError
 from logpolar_track.evaluate import (GroundTruth, GroundTruthError, Track, auc, box_iou, ground_truth_from_boxes,
                                      ground_truth_from_ellipses, precision_curve, read_box_text, read_gt_csv,
                                      read_track_csv, rect_from_polygon, rotated_box_corners, rotated_box_iou,
@@ -127,6 +129,15 @@ def test_precision_and_success_rate():
     assert curve[20] == pytest.approx(3 / 5)  # at most 20 px; NaN counts as a miss
     assert curve[0] == pytest.approx(1 / 5)
     assert success_rate(np.array([1.0, 3.0, 2.4]), np.array([10.0, 10.0, 10.0])) == pytest.approx(2 / 3)
+
+
+def test_edge_inputs_give_nan_or_an_error_not_numpy_warnings():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a RuntimeWarning would fail here
+        assert np.isnan(scale_errors(np.array([1.0, 1.1]), np.array([0.0, 1.0]))[0])
+        assert math.isnan(auc(np.array([])))
+        with pytest.raises(UsageError, match="period must be a number of degrees > 0"):
+            rotation_errors(np.array([170.0]), np.array([-10.0]), 0)
 
 
 def test_scale_and_rotation_errors():

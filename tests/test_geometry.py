@@ -57,6 +57,16 @@ def test_ellipse_refuses_non_finite_values_and_non_positive_semi_axes(values, me
     assert isinstance(err.value, ValueError)  # what callers outside lptrack catch
 
 
+def test_an_ellipse_holds_plain_floats_whatever_numbers_it_is_given():
+    """A detector's float32 ROI gave states with float32 fields (json.dumps refused them); a bool, a 1-element
+    array or a text was taken as a number, or raised a TypeError."""
+    e = Ellipse(np.float32(10.5), np.int64(20), 3, np.float64(2.0), np.float32(30))
+    assert all(type(v) is float for v in (e.cx, e.cy, e.a, e.b, e.angle_deg)) and e == Ellipse(10.5, 20, 3, 2, 30)
+    for bad in (True, np.array([1.0]), "150", None):
+        with pytest.raises(RoiError, match="an ellipse needs numbers"):
+            Ellipse(bad, 20.0, 3.0, 2.0)
+
+
 def test_ellipse_made_from_another_is_checked_too():
     roi = Ellipse.circle(80, 60, 20)
     assert roi.moved(1e6, -1e6, 1e-3, 1e9) == Ellipse(1e6, -1e6, 0.02, 0.02, 1e9)  # odd but finite: kept

@@ -83,6 +83,29 @@ def test_read_frame_past_the_end_gives_the_valid_range(tiny_video):
         read_frame(tiny_video.path, 20)
 
 
+def test_read_frame_takes_whole_frame_numbers_only_as_track_video_does(tiny_video):
+    """1.5 read frame 1, '3' frame 3 and True frame 1, where track_video refuses them."""
+    for index in (1.5, "3", True):
+        with pytest.raises(UsageError, match=f"frame index must be a whole number >= 0, got {re.escape(repr(index))}"):
+            read_frame(tiny_video.path, index)
+    with pytest.raises(UsageError, match="time must be a number of seconds >= 0, got '1'"):
+        read_frame(tiny_video.path, time_s="1")
+    assert read_frame(tiny_video.path, np.int64(3)).index == 3
+
+
+def test_roi_from_points_refuses_an_array_of_another_shape_or_not_finite():
+    """A (2, n) array (its xs and ys) was flattened and read as pairs: a wrong ellipse without a word."""
+    t = np.radians(np.arange(0, 360, 30))
+    xs, ys = 100 + 40 * np.cos(t), 100 - 20 * np.sin(t)
+    with pytest.raises(RoiError, match=r"an \(n, 2\) array of \(x, y\) pixels .*got shape \(2, 12\)"):
+        roi_from_points(np.array([xs, ys]))
+    with pytest.raises(RoiError, match="finite"):
+        roi_from_points(np.array([[1.0, 2.0], [np.nan, 3.0], [4.0, 5.0], [6.0, 1.0]]))
+    fitted = roi_from_points(np.stack([xs, ys], axis=1))
+    assert fitted == roi_from_points(np.stack([xs, ys], axis=1)[:, None, :])  # an OpenCV contour
+    assert abs(fitted.a - 40) < 0.01 and abs(fitted.b - 20) < 0.01
+
+
 def test_roi_hint_quotes_a_path_the_shell_would_split(tiny_video, tmp_path):
     spaced = tmp_path / "my clip.mp4"
     shutil.copy(tiny_video.path, spaced)

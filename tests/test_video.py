@@ -19,7 +19,7 @@ import pytest
 
 from conftest import count_frames, damage_middle, decode_all, write_video
 from logpolar_track import video as video_module
-from logpolar_track.errors import OutputError, VideoError
+from logpolar_track.errors import OutputError, UsageError, VideoError
 from logpolar_track.outputs import temporary_path
 from logpolar_track.video import FALLBACK_FPS, VideoReader, VideoWriter
 
@@ -782,3 +782,10 @@ def test_a_stream_whose_first_frame_is_stamped_late_keeps_its_nominal_times(tiny
     with VideoReader(tiny_video.path) as reader:  # 30 fps
         assert [reader.time_of(i, 0.133 + i / 30) for i in range(4)] == [i / 30 for i in range(4)]
         assert reader.timestamps_from is None
+
+
+def test_a_video_is_given_by_its_path_not_a_camera_index():
+    """``track_video(0)`` (OpenCV's first camera) and bytes raised a TypeError from Path."""
+    for path in (0, b"clip.mp4"):
+        with pytest.raises(UsageError, match=r"a video is given by its file's path \(str or Path\), got "):
+            VideoReader(path)

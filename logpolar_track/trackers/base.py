@@ -10,6 +10,7 @@ from __future__ import annotations
 import difflib
 import inspect
 import math
+import numbers
 import re
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
@@ -17,7 +18,7 @@ from typing import Callable, ClassVar, Iterable
 
 import numpy as np
 
-from ..errors import LptrackError, UsageError
+from ..errors import LptrackError, NotStartedError, UsageError
 from ..geometry import Ellipse, as_ellipse, check_roi_fits, wrap_degrees
 from ..logpolar import to_gray
 
@@ -128,7 +129,7 @@ class SimilarityTracker(Tracker):
 
     def update(self, frame: np.ndarray) -> tuple[bool, TrackState]:
         if self.last is None:
-            raise RuntimeError("update() called before init()")
+            raise NotStartedError("update() called before init(); start the tracker on a frame and a ROI first")
         frame = np.asarray(frame)
         check_frame(frame, self.frame_size, self.frame_layout)
         estimate = self._estimate(self._prepared(frame), self.last)
@@ -228,13 +229,18 @@ def check_start(frame: np.ndarray, roi) -> Ellipse:
     Raises
     ------
     UsageError
-        The frame is not an image.
+        The frame is not an image, or is float32 with values within 0 to 1 (not 0 to 255).
     RoiError
         The ROI is not one, is too small or does not fit the frame (an :class:`Ellipse` is finite, with
         semi-axes > 0, by construction).
     """
     frame = np.asarray(frame)
     check_frame(frame)
+    if frame.dtype == np.float32 and 0.0 < float(frame.max()) <= 1.0:
+        # Checked on the first frame only: a frame of 0 to 255 that is all at most 1 would be black. (OpenCV's
+        # trackers rounded such frames to an image of 0s and 1s; lptrack's own track them alike.)
+        raise UsageError("a float32 frame must have values from 0 to 255 (as OpenCV's are), but this one's are all "
+                         "within 0 to 1: multiply it by 255 first")
     roi = as_ellipse(roi)
     check_roi_fits(roi, frame.shape[1], frame.shape[0])
     return roi
@@ -318,6 +324,10 @@ def create_tracker(name: str, **params) -> Tracker:
     cls = tracker_class(name)
     if not getattr(cls, "available", lambda: True)():
         raise UsageError(f"tracker '{name}' is not available here: {cls.unavailable_reason()}")
+    taken = tracker_parameters(name)
+    for key, value in params.items():
+        if key in taken:
+            _check_kind(name, key, value, taken[key])
     try:
         return cls(**params)
     except LptrackError:
@@ -355,6 +365,24 @@ def tracker_parameters(name: str) -> dict[str, object]:
 
 
 _TRUE, _FALSE = ("true", "yes", "on", "1"), ("false", "no", "off", "0")
+
+
+def _check_kind(tracker: str, key: str, value: object, default: object) -> None:
+    """Refuse a value from Python that is not of the kind of the parameter's ``default``: a flag takes a bool (not
+    the text 'false', which is true), a count a whole number (not 40.9, which was cut to 40), a number a number."""
+    kind = type(default)
+    if kind is bool:
+        fits = isinstance(value, (bool, np.bool_))
+    elif kind is int:
+        fits = (isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))) or (
+            isinstance(value, float) and value.is_integer())
+    elif kind is float:
+        fits = isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+    else:
+        return
+    if not fits:
+        what = {bool: "True or False", int: "a whole number", float: "a number"}[kind]
+        raise UsageError(f"{tracker}: parameter {key} takes {what} (default {default!r}), got {value!r}")
 
 
 def _converted(tracker: str, key: str, text: str, default: object) -> object:

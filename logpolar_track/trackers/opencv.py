@@ -34,7 +34,7 @@ import sys
 
 import numpy as np
 
-from ..errors import RoiError
+from ..errors import NotStartedError, RoiError
 from ..geometry import Ellipse
 from ..logpolar import within_0_255
 from .base import Tracker, TrackState, check_frame, check_ranges, check_start, frame_layout, register
@@ -116,15 +116,18 @@ class _OpenCVTracker(Tracker):
         # Fixed seeds of the random numbers MIL draws (see the module's notes), so that its runs repeat.
         cv2.setRNGSeed(self.seed)
         _seed_c_rand(self.seed)
-        self._tracker = self._create()
+        # Made aside and kept only once it has started: a refused start leaves the tracker as it was (MIL's object
+        # after its failed init crashed the process on the next update).
+        tracker = self._create()
         try:
-            self._tracker.init(_bgr(frame), box)
+            tracker.init(_bgr(frame), box)
         except cv2.error as exc:
             # MIL samples its negatives around the box: a box spanning the frame leaves none (an assertion).
             reason = str(exc).strip().splitlines()[-1].strip().rpartition("error: ")[2]
             raise RoiError(f"{self.name} cannot start on the ROI's box ({box[2]}x{box[3]} px at {box[0]},{box[1]}) "
                            f"in a {width}x{height} frame: OpenCV says {reason}; give a smaller ROI, with room "
                            "around it inside the frame") from None
+        self._tracker = tracker
         self._frame_size, self._frame_layout = (frame.shape[1], frame.shape[0]), frame_layout(frame)
         self._roi, self._box0 = roi, box
         self._size0 = math.sqrt(box[2] * box[3])
@@ -133,7 +136,7 @@ class _OpenCVTracker(Tracker):
 
     def update(self, frame: np.ndarray) -> tuple[bool, TrackState]:
         if self._tracker is None:
-            raise RuntimeError("update() called before init()")
+            raise NotStartedError("update() called before init(); start the tracker on a frame and a ROI first")
         frame = np.asarray(frame)
         check_frame(frame, self._frame_size, self._frame_layout)
         ok, box = self._tracker.update(_bgr(frame))

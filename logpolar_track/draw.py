@@ -11,7 +11,8 @@ import math
 import cv2
 import numpy as np
 
-from .trackers.base import TrackState
+from .logpolar import to_bgr
+from .trackers.base import TrackState, check_frame
 
 #: BGR colours: green while tracked (and at init), red when lost.
 TRACKED_COLOUR = (0, 220, 0)
@@ -54,7 +55,8 @@ def draw_state(frame: np.ndarray, state: TrackState, *, frame_index: int | None 
     Parameters
     ----------
     frame : ndarray
-        BGR (H, W, 3) or grey (H, W) uint8 image; not modified unless ``in_place``.
+        BGR (H, W, 3), grey or BGRA image, uint8 or float32 from 0 to 255 (as a tracker takes it); not modified
+        unless ``in_place`` (and it is BGR uint8).
     state : TrackState
         Ellipse in pixels (x right, y down), angle in degrees counter-clockwise on screen.
     frame_index : int, optional
@@ -81,10 +83,9 @@ def draw_state(frame: np.ndarray, state: TrackState, *, frame_index: int | None 
     OpenCV's ``ellipse`` angle is measured clockwise on screen (y down), lptrack's counter-clockwise, hence
     the negated angle.
     """
-    if frame.ndim == 2:
-        out = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
-    else:
-        out = frame if in_place else frame.copy()
+    check_frame(frame)
+    bgr = to_bgr(frame)
+    out = bgr if bgr is not frame or in_place else frame.copy()
     height, width = out.shape[:2]
     size = min(height, width)
     line = thickness if thickness is not None else max(1, int(round(size / 480)))

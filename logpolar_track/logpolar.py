@@ -166,6 +166,21 @@ def to_gray(frame: np.ndarray, dtype=np.float32) -> np.ndarray:
     return frame.astype(dtype, copy=frame is given)
 
 
+def to_bgr(frame: np.ndarray) -> np.ndarray:
+    """A grey, BGR or BGRA frame (uint8, or float32 from 0 to 255) as a 3-channel uint8 BGR image: grey expanded,
+    alpha dropped, a float frame's values rounded within 0 to 255. The frame itself if it is one already; otherwise
+    a new array (the input is not modified)."""
+    if frame.dtype != np.uint8:
+        frame = np.rint(within_0_255(frame)).astype(np.uint8)
+    if frame.ndim == 3 and frame.shape[2] == 1:
+        frame = frame[:, :, 0]
+    if frame.ndim == 2:
+        return cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+    if frame.shape[2] == 4:
+        return cv2.cvtColor(frame, cv2.COLOR_BGRA2BGR)
+    return frame
+
+
 def within_0_255(frame: np.ndarray) -> np.ndarray:
     """A float frame (any channels) with every value in 0 to 255: beyond it clipped, NaN 0, infinities 0 or 255
     (a computation gone wrong upstream; NaN reached lpcf's features as a garbage bin index). A new array."""

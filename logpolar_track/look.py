@@ -41,9 +41,10 @@ from .draw import LOST_COLOUR, TRACKED_COLOUR, draw_state
 from .errors import FrameRangeError, OutputError, RoiError, UsageError, VideoError, counted
 from .evaluate import (GroundTruthError, Track, read_data_file, rotation_errors, same_file, scale_errors, score_track,
                        several_videos)
-from .geometry import Ellipse, check_roi_fits, ellipse_in_box
+from .geometry import Ellipse, as_ellipse, check_roi_fits, ellipse_in_box
+from .logpolar import to_bgr
 from .results import COLUMNS, FrameResult, off_contract
-from .trackers.base import TrackState
+from .trackers.base import TrackState, check_frame
 from .outputs import check_output_path, written_into_place
 from .video import VIDEO_EXTENSIONS, VideoReader, guess_image_sequence, video_stem
 
@@ -214,7 +215,7 @@ def draw_grid(image: np.ndarray, spacing: int = 50, *, colour=GRID_COLOUR, capti
     Parameters
     ----------
     image : ndarray
-        BGR or grey uint8; not modified.
+        BGR, grey or BGRA, uint8 or float32 from 0 to 255 (a frame as a tracker takes it); not modified.
     spacing : int
         Grid step in pixels; lines at x = spacing, 2*spacing, ... and likewise y. 0 draws no lines (the size
         caption still appears).
@@ -236,7 +237,10 @@ def draw_grid(image: np.ndarray, spacing: int = 50, *, colour=GRID_COLOUR, capti
     lines are closer than a label is wide, only every k-th line is labelled (always the multiples of the
     same k, so labels stay on round numbers).
     """
-    out = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR) if image.ndim == 2 else image.copy()
+    image = np.asarray(image)
+    check_frame(image)
+    out = to_bgr(image)
+    out = out.copy() if out is image else out
     height, width = out.shape[:2]
     spacing = int(spacing)
     if spacing < 0:
@@ -273,8 +277,10 @@ def draw_grid(image: np.ndarray, spacing: int = 50, *, colour=GRID_COLOUR, capti
 def draw_roi(image: np.ndarray, roi: Ellipse, *, colour=ROI_COLOUR, label: bool = True) -> np.ndarray:
     """A copy of ``image`` with ``roi`` drawn as ``lptrack run`` draws a state: outline, centre, axis-a line.
 
-    The ROI's ``--roi`` spec is written next to it when ``label`` is true.
+    ``roi`` is an :class:`Ellipse`, a ``--roi`` string or its numbers; ``image`` a frame as :func:`draw_grid` takes
+    it. The ROI's ``--roi`` spec is written next to it when ``label`` is true.
     """
+    roi = as_ellipse(roi)
     state = TrackState(roi, 1.0, 0.0, 1.0)
     out = draw_state(image, state, colour=colour, text=False)
     if label:

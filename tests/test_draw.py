@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from logpolar_track.draw import LOST_COLOUR, TRACKED_COLOUR, draw_state, readout_text
+from logpolar_track.errors import UsageError
 from logpolar_track.geometry import Ellipse
 from logpolar_track.trackers import TrackState
 
@@ -88,3 +89,20 @@ def test_grey_frame_and_state_far_off_frame():
     grey = np.zeros((H, W), np.uint8)
     out = draw_state(grey, _state(Ellipse(1e9, -1e9, 1e7, 5, 10)))
     assert out.shape == (H, W, 3)
+
+
+def test_drawing_takes_every_frame_a_tracker_takes():
+    """draw_grid raised ValueError on a BGRA frame and cv2.error on float32; draw_roi an AttributeError on a --roi
+    string (a fresh review of the library)."""
+    from logpolar_track.look import draw_grid, draw_roi
+
+    bgr = np.random.default_rng(0).integers(0, 255, (100, 120, 3), np.uint8)
+    variants = [bgr, np.dstack([bgr, np.full((100, 120), 255, np.uint8)]), bgr.astype(np.float32)]
+    grids = [draw_grid(v, 20) for v in variants]
+    rois = [draw_roi(v, "60,50,20") for v in variants]
+    for drawn in (grids, rois):
+        assert all(d.dtype == np.uint8 and d.shape == (100, 120, 3) for d in drawn)
+        assert all(np.array_equal(d, drawn[0]) for d in drawn[1:])
+    assert np.array_equal(rois[0], draw_roi(bgr, Ellipse(60, 50, 20, 20)))
+    with pytest.raises(UsageError, match="a frame must be uint8"):
+        draw_grid(bgr.astype(np.float64))

@@ -36,7 +36,7 @@ import numpy as np
 
 from ..errors import NotStartedError, RoiError
 from ..geometry import Ellipse
-from ..logpolar import within_0_255
+from ..logpolar import to_bgr
 from .base import Tracker, TrackState, check_frame, check_ranges, check_start, frame_layout, register
 
 _CONTRIB_HINT = ("needs opencv-contrib-python-headless instead of opencv-python-headless "
@@ -120,7 +120,7 @@ class _OpenCVTracker(Tracker):
         # after its failed init crashed the process on the next update).
         tracker = self._create()
         try:
-            tracker.init(_bgr(frame), box)
+            tracker.init(to_bgr(frame), box)
         except cv2.error as exc:
             # MIL samples its negatives around the box: a box spanning the frame leaves none (an assertion).
             reason = str(exc).strip().splitlines()[-1].strip().rpartition("error: ")[2]
@@ -139,7 +139,7 @@ class _OpenCVTracker(Tracker):
             raise NotStartedError("update() called before init(); start the tracker on a frame and a ROI first")
         frame = np.asarray(frame)
         check_frame(frame, self._frame_size, self._frame_layout)
-        ok, box = self._tracker.update(_bgr(frame))
+        ok, box = self._tracker.update(to_bgr(frame))
         box = tuple(float(v) for v in box)
         if not ok or box[2] <= 0 or box[3] <= 0 or not all(math.isfinite(v) for v in box):
             return False, TrackState(self._last.ellipse, self._last.scale, None, 0.0)
@@ -164,22 +164,6 @@ def _seed_c_rand(seed: int) -> None:
         library.srand(ctypes.c_uint(seed))
     except (OSError, AttributeError):
         pass
-
-
-def _bgr(frame: np.ndarray) -> np.ndarray:
-    """A frame as OpenCV's trackers take it: 3-channel uint8 BGR. Grey frames are expanded, BGRA drops alpha and
-    float32 (0 to 255) is rounded; the caller's array is untouched."""
-    import cv2
-
-    if frame.dtype != np.uint8:
-        frame = np.rint(within_0_255(frame)).astype(np.uint8)
-    if frame.ndim == 3 and frame.shape[2] == 1:
-        frame = frame[:, :, 0]
-    if frame.ndim == 2:
-        return cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
-    if frame.shape[2] == 4:
-        return cv2.cvtColor(frame, cv2.COLOR_BGRA2BGR)
-    return frame
 
 
 @register

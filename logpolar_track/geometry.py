@@ -54,10 +54,11 @@ class Ellipse:
     angle_deg: float = 0.0
 
     def __post_init__(self) -> None:
-        values = (self.cx, self.cy, self.a, self.b, self.angle_deg)
-        if not all(type(value) is float for value in values):
+        if not (type(self.cx) is float and type(self.cy) is float and type(self.a) is float
+                and type(self.b) is float and type(self.angle_deg) is float):
             # Plain floats, whatever numbers were given (a detector's float32, ints): what a tracker's states carry
             # back to the caller, and what json.dumps takes. Not a bool, a 1-element array or a text.
+            values = (self.cx, self.cy, self.a, self.b, self.angle_deg)
             if not all(isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
                        for value in values):
                 raise RoiError(f"an ellipse needs numbers (pixels and degrees), got cx, cy, a, b, angle_deg = "
@@ -65,7 +66,7 @@ class Ellipse:
             for name, value in zip(("cx", "cy", "a", "b", "angle_deg"), values):
                 object.__setattr__(self, name, float(value))
         # Chained comparisons rather than math.isfinite: NaN fails them too, and trackers build an ellipse every
-        # frame (this adds about 0.1 us to the 0.6 us of the dataclass's own __init__).
+        # frame (with the type test above, about 0.2 us more than the 0.6 us of the dataclass's own __init__).
         if not (0.0 < self.a < _INF and 0.0 < self.b < _INF and -_INF < self.cx < _INF and -_INF < self.cy < _INF
                 and -_INF < self.angle_deg < _INF):
             raise RoiError(_invalid_message(self))

@@ -179,7 +179,9 @@ def _frame_at_time(path: Path, time_s: float, fps: float | None) -> Frame:
         previous = None
         for index, time_i, image in reader:
             if time_i >= time_s:
-                if previous is not None and time_s - previous[1] < time_i - time_s:
+                # Within a microsecond is a tie: 0.06 s at 25 fps is as near frame 1 (0.04) as frame 2 (0.08), but
+                # 0.06 - 0.04 comes out below 0.08 - 0.06 in floating point, and the earlier frame was taken.
+                if previous is not None and (time_i - time_s) - (time_s - previous[1]) > 1e-6:
                     index, time_i, image = previous
                 return Frame(image.copy(), index, time_i, reader.fps, reader.fps_guessed, path)
             previous = index, time_i, image

@@ -69,6 +69,15 @@ def test_read_frame_at_a_time_rounds_to_the_nearest_frame(tiny_video):
     assert np.array_equal(frame.image, decode_all(tiny_video.path)[15])
 
 
+def test_read_frame_at_a_time_halfway_between_two_frames_is_the_later_on_every_frame(tiny_video):
+    """A tie takes the later frame, as the README says; in floating point some halfway times came out nearer the
+    earlier (at 25 fps, 0.06 s gave frame 1, 0.18 s frame 4)."""
+    fps = read_frame(tiny_video.path, 0).fps
+    for rate in (fps, 25.0):
+        for k in range(18):
+            assert read_frame(tiny_video.path, time_s=(k + 0.5) / rate, fps=rate).index == k + 1, (rate, k)
+
+
 def test_read_frame_at_a_time_on_the_last_frame_is_the_last_frame(tiny_video):
     """A time while the last frame is on screen (19.6 frames at 30 fps: rounds to 20, past the end) gives it; the
     end of the video does not."""

@@ -129,11 +129,12 @@ reads the run from stdin (then give -o).
 Examples:
   lptrack plot clip.lptrack.csv --video clip.mp4 -o track.png
   lptrack plot spin.lptrack.csv --video sample_videos/spin.mp4 --gt sample_videos/spin.gt.csv
-  lptrack run clip.mp4 --csv - | lptrack plot - --video clip.mp4 -o track.png
+  lptrack run clip.mp4 --roi 320,240,40 --no-video --csv - | lptrack plot - --video clip.mp4 -o track.png
 """)
 @click.argument("run_csv", type=PathParam(dir_okay=False, path_type=Path), metavar="RUN.csv")
 @click.option("-o", "--out", "out_png", type=PathParam(dir_okay=False, path_type=Path), metavar="PNG",
-              help="Figure to write: .png, or .pdf or .svg. Default: <RUN stem>.plot.png in the current folder.")
+              help="Figure to write: .png, or .pdf or .svg. Default: RUN.csv's name with .plot.png for its "
+                   "extension (clip.lptrack.plot.png), in the current folder.")
 @click.option("--gt", "gt_path", type=PathParam(path_type=Path), metavar="GT",
               help="Ground truth to overlay and score: lptrack .gt.csv, OTB/UAV123 x,y,w,h .txt, VOT "
                    "groundtruth.txt, or a sequence folder holding one (as 'lptrack eval').")
@@ -183,12 +184,13 @@ def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path 
 Examples:
   lptrack sheet clip.mp4 clip.lptrack.csv                 # 4 x 3 frames
   lptrack sheet clip.mp4 clip.lptrack.csv --count 20 --cols 5 --width 2000
-  lptrack run clip.mp4 --csv - | lptrack sheet clip.mp4 - -o sheet.png  # '-': stdin
+  lptrack run clip.mp4 --no-video --csv - | lptrack sheet clip.mp4 - -o sheet.png  # '-': stdin
 """)
 @click.argument("video", type=_VIDEO)
 @click.argument("run_csv", type=PathParam(dir_okay=False, path_type=Path), metavar="RUN.csv")
 @click.option("-o", "--out", "out_png", type=PathParam(dir_okay=False, path_type=Path), metavar="PNG",
-              help="PNG to write. Default: <RUN stem>.sheet.png in the current folder.")
+              help="PNG to write. Default: RUN.csv's name with .sheet.png for its extension "
+                   "(clip.lptrack.sheet.png), in the current folder.")
 @click.option("--cols", type=WholeNumber(min=1, max=64), default=4, show_default=True, help="Columns.")
 @click.option("--rows", type=WholeNumber(min=1, max=64), default=None, metavar="N",
               help=f"Rows: --cols x N frames. Default {SHEET_ROWS}; not with --count.")

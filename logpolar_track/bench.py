@@ -738,10 +738,12 @@ def plot_curves(summary: list[dict], path, caption: str | None = None, *, overwr
         plt.close(fig)
 
 
-def eval_document(pred_path, gt_path, metrics: dict, *, per_frame: bool = True) -> dict:
-    """JSON-ready document of ``lptrack eval``: inputs, metric constants and every metric."""
+def eval_document(pred_path, gt_path, metrics: dict, *, per_frame: bool = True, video=None) -> dict:
+    """JSON-ready document of ``lptrack eval``: inputs, metric constants and every metric; with ``video``, the video
+    whose rows of a batch's stream were scored (``"video"``)."""
     kept = metrics if per_frame else {k: v for k, v in metrics.items() if k not in PER_FRAME_KEYS}
-    return _clean({"schema_version": SCHEMA_VERSION, "tool": "lptrack eval", "prediction": str(pred_path),
+    chosen = {} if video is None else {"video": str(video)}
+    return _clean({"schema_version": SCHEMA_VERSION, "tool": "lptrack eval", "prediction": str(pred_path), **chosen,
                    "ground_truth": str(gt_path), "success_radius_fraction": SUCCESS_RADIUS_FRACTION,
                    "precision_px": PRECISION_PX, "metrics": kept})
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import errno
+import json
 import math
 import re
 import shutil
@@ -466,6 +467,9 @@ def test_eval_scores_one_video_of_a_batch_stream(tiny_run, tmp_path, monkeypatch
         assert result.exit_code == 0, result.stderr
         # The table's row, but for its first column (the CSV's name).
         assert result.stdout.splitlines()[2].split()[1:] == alone.stdout.splitlines()[2].split()[1:]
+    scored = json.loads(invoke("eval", "all.csv", "tiny.gt.csv", "--video", "copy.mp4", "--json", "-").stdout)
+    assert scored["prediction"] == "all.csv" and scored["video"] == "copy.mp4"  # which of the stream's videos
+    assert "video" not in json.loads(invoke("eval", str(run_csv), str(gt), "--json", "-").stdout)
     refused = invoke("eval", "all.csv", "tiny.gt.csv")
     assert refused.exit_code == 1 and refused.stderr == (
         "lptrack: error: run CSV 'all.csv' holds the rows of 2 videos (tiny.mp4, copy.mp4: its 'video' column); "

@@ -370,7 +370,7 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, vid
     if json_out is None:
         write_stdout(table)
         return
-    text = json.dumps(eval_document(prediction, ground_truth, metrics), indent=1) + "\n"
+    text = json.dumps(eval_document(prediction, ground_truth, metrics, video=video), indent=1) + "\n"
     if json_out == "-":
         write_stdout(text)
     else:

@@ -389,8 +389,9 @@ def _discover(folder: Path, depth: int, unread: list[tuple[Path, str]]) -> list[
     if found:
         # Videos with their ground truth, as lptrack samples writes them: those without are said to be skipped, and
         # the folders beside them searched, as 'lptrack run' searches a folder.
+        with_truth = {s.path for s in found}
         lacking = [p for p in sorted(folder.iterdir(), key=_natural_key)
-                   if p.suffix.lower() in VIDEO_EXTENSIONS and p.is_file() and p not in {s.path for s in found}]
+                   if p.suffix.lower() in VIDEO_EXTENSIONS and p.is_file() and p not in with_truth]
         unread.extend((video, f"no {video.name[:-len(video.suffix)]}.gt.csv ground truth beside it")
                       for video in lacking)
     if depth > 0:

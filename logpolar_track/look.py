@@ -46,7 +46,7 @@ from .logpolar import to_bgr
 from .results import COLUMNS, FrameResult, off_contract
 from .trackers.base import TrackState, check_frame
 from .outputs import check_output_path, written_into_place
-from .video import VIDEO_EXTENSIONS, VideoReader, guess_image_sequence, video_stem
+from .video import VIDEO_EXTENSIONS, VideoReader, check_frame_number, guess_image_sequence, video_stem
 
 #: BGR colour of the grid lines drawn by :func:`draw_grid` (cyan: rare in natural images, legible on both
 #: dark and light backgrounds).
@@ -150,13 +150,9 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None, f
                 and time_s >= 0):
             raise UsageError(f"time must be a number of seconds >= 0, got {time_s!r}")
         return _frame_at_time(path, time_s, fps)
-    if index is None:
-        index = 0
-    elif not isinstance(index, numbers.Integral) or isinstance(index, bool):  # 1.5 was frame 1, '3' frame 3
-        raise UsageError(f"frame index must be a whole number >= 0, got {index!r}")
+    index = 0 if index is None else index
+    check_frame_number(index, "frame index")  # 1.5 was frame 1, '3' frame 3
     index = int(index)
-    if index < 0:
-        raise UsageError(f"frame index must be >= 0, got {index}")
     try:
         reader = VideoReader(path, start_frame=index, read_ahead=1, fps=fps)
     except VideoError:

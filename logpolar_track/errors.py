@@ -1,13 +1,28 @@
 """Exceptions raised by lptrack's library code.
 
 The library raises; only :mod:`logpolar_track.cli` turns these into one line on stderr and an exit code.
-Messages say what was expected, what was received and how to fix it.
+Messages say what was expected, what was received and how to fix it; :func:`is_real` and :func:`is_whole` are the
+tests of a number that the checks raising them share.
 """
+
+import numbers
 
 
 def counted(n: int, noun: str) -> str:
     """``n`` and ``noun``, plural unless ``n`` is 1 (``"1 frame"``, ``"20 frames"``), for messages."""
     return f"{n} {noun}" + ("" if n == 1 else "s")
+
+
+def is_real(value: object) -> bool:
+    """Whether ``value`` is a real number for a check: a Python or NumPy int or float, not a bool (which Python
+    counts as an int: ``True`` would pass as 1), a text, an array or None."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def is_whole(value: object) -> bool:
+    """Whether ``value`` is a whole number for a check: a Python or NumPy int, not a bool, nor a float such as 1.5
+    or 2.0 (frame numbers and counts; where a whole float is fine, test ``float.is_integer`` too)."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 
 class LptrackError(Exception):

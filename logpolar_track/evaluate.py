@@ -56,14 +56,13 @@ All metric functions are pure functions of numpy arrays.
 from __future__ import annotations
 
 import math
-import numbers
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .errors import LptrackError, UsageError
+from .errors import LptrackError, UsageError, is_real
 from .geometry import Ellipse, ellipse_in_rotated_rect
 from .results import off_contract
 
@@ -837,7 +836,7 @@ def rotation_errors(pred_deg: np.ndarray, gt_deg: np.ndarray, period: float = 36
     UsageError
         ``period`` is not a number > 0.
     """
-    if not (isinstance(period, numbers.Real) and not isinstance(period, bool) and 0 < period < math.inf):
+    if not (is_real(period) and 0 < period < math.inf):
         raise UsageError(f"period must be a number of degrees > 0 (360, 180), got {period!r}")
     d = np.asarray(pred_deg, float) - np.asarray(gt_deg, float)
     if unwrapped and period >= 360.0:

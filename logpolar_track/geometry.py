@@ -14,12 +14,11 @@ This module needs no OpenCV.
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import RoiError, counted
+from .errors import RoiError, counted, is_real
 
 _INF = math.inf
 
@@ -59,8 +58,7 @@ class Ellipse:
             # Plain floats, whatever numbers were given (a detector's float32, ints): what a tracker's states carry
             # back to the caller, and what json.dumps takes. Not a bool, a 1-element array or a text.
             values = (self.cx, self.cy, self.a, self.b, self.angle_deg)
-            if not all(isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
-                       for value in values):
+            if not all(is_real(value) for value in values):
                 raise RoiError(f"an ellipse needs numbers (pixels and degrees), got cx, cy, a, b, angle_deg = "
                                f"{', '.join(repr(value) for value in values)}")
             for name, value in zip(("cx", "cy", "a", "b", "angle_deg"), values):

@@ -26,7 +26,6 @@ subclasses; they never print.
 from __future__ import annotations
 
 import math
-import numbers
 import os
 import warnings
 from dataclasses import dataclass
@@ -38,7 +37,7 @@ import numpy as np
 
 from .datasets import load_ground_truth
 from .draw import LOST_COLOUR, TRACKED_COLOUR, draw_state
-from .errors import FrameRangeError, OutputError, RoiError, UsageError, VideoError, counted
+from .errors import FrameRangeError, OutputError, RoiError, UsageError, VideoError, counted, is_real
 from .evaluate import (GroundTruthError, Track, read_data_file, rotation_errors, same_file, scale_errors, score_track,
                        several_videos)
 from .geometry import Ellipse, as_ellipse, check_roi_fits, ellipse_in_box
@@ -146,8 +145,7 @@ def read_frame(path, index: int | None = None, *, time_s: float | None = None, f
         raise UsageError("give a frame index or a time, not both")
     path = Path(path)
     if time_s is not None:
-        if not (isinstance(time_s, numbers.Real) and not isinstance(time_s, bool) and math.isfinite(time_s)
-                and time_s >= 0):
+        if not (is_real(time_s) and math.isfinite(time_s) and time_s >= 0):
             raise UsageError(f"time must be a number of seconds >= 0, got {time_s!r}")
         return _frame_at_time(path, time_s, fps)
     index = 0 if index is None else index

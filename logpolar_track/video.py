@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import contextlib
 import math
-import numbers
 import os
 
 # FFmpeg's own messages ("moov atom not found") would bury ours; FFmpeg reads the variable when a file is
@@ -39,7 +38,8 @@ from typing import Iterator  # noqa: E402
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .errors import FrameRangeError, LptrackError, OutputError, UsageError, VideoError, counted  # noqa: E402
+from .errors import (FrameRangeError, LptrackError, OutputError, UsageError, VideoError, counted, is_real,  # noqa: E402
+                     is_whole)
 from .outputs import check_output_path, temporary_path, written_into_place  # noqa: E402
 
 #: Frame rate assumed when a container reports none (0 or NaN), in frames per second.
@@ -284,8 +284,8 @@ MIN_VIDEO_FPS = 0.002
 def check_fps(fps: float | None) -> None:
     """Refuse a frame rate that is given but not a number within :data:`FPS_RANGE` (frames per second)."""
     low, high = FPS_RANGE
-    if fps is not None and not (_is_number(fps) and math.isfinite(fps) and low <= fps <= high):
-        shown = f"{fps:g}" if _is_number(fps) else repr(fps)
+    if fps is not None and not (is_real(fps) and math.isfinite(fps) and low <= fps <= high):
+        shown = f"{fps:g}" if is_real(fps) else repr(fps)
         raise UsageError(f"the frame rate must be a positive number of frames per second, from {low:g} to "
                          f"{high:,.0f}, got {shown}")
 
@@ -293,12 +293,8 @@ def check_fps(fps: float | None) -> None:
 def check_frame_number(value, what: str, low: int = 0) -> None:
     """Refuse a frame number or count (``what``, for the message) that is not a whole number of at least ``low``:
     the library took 1.5 as frame 1 and ``'3'`` raised a TypeError, where the CLI refuses both."""
-    if not (isinstance(value, numbers.Integral) and not isinstance(value, bool) and value >= low):
+    if not (is_whole(value) and value >= low):
         raise UsageError(f"{what} must be a whole number >= {low}, got {value!r}")
-
-
-def _is_number(value) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
 def frames_to_track(frame_count: int, start_frame: int, max_frames: int | None) -> int | None:

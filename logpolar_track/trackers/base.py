@@ -10,7 +10,6 @@ from __future__ import annotations
 import difflib
 import inspect
 import math
-import numbers
 import re
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
@@ -18,7 +17,7 @@ from typing import Callable, ClassVar, Iterable
 
 import numpy as np
 
-from ..errors import LptrackError, NotStartedError, UsageError
+from ..errors import LptrackError, NotStartedError, UsageError, is_real, is_whole
 from ..geometry import Ellipse, as_ellipse, check_roi_fits, wrap_degrees
 from ..logpolar import to_gray
 
@@ -374,10 +373,9 @@ def _check_kind(tracker: str, key: str, value: object, default: object) -> None:
     if kind is bool:
         fits = isinstance(value, (bool, np.bool_))
     elif kind is int:
-        fits = (isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))) or (
-            isinstance(value, float) and value.is_integer())
+        fits = is_whole(value) or (isinstance(value, float) and value.is_integer())
     elif kind is float:
-        fits = isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+        fits = is_real(value)
     else:
         return
     if not fits:

@@ -1,8 +1,10 @@
 """Exceptions raised by lptrack's library code.
 
 The library raises; only :mod:`logpolar_track.cli` turns these into one line on stderr and an exit code.
-Messages say what was expected, what was received and how to fix it; :func:`is_real` and :func:`is_whole` are the
-tests of a number that the checks raising them share.
+Messages say what was expected, what was received and how to fix it. Where the fix is an option they name the
+CLI's (``--overwrite``): each is the keyword argument of that name in Python (``overwrite=True``), so one message
+serves both. The CLI is what most users meet; a second wording of every message would drift from the first.
+:func:`is_real` and :func:`is_whole` are the tests of a number that the checks raising them share.
 """
 
 import numbers

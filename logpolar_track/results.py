@@ -216,10 +216,11 @@ def read_data_rows(path) -> tuple[list[str], list[tuple[int, list[str]]]]:
 
 
 @contextlib.contextmanager
-def stdout_errors():
-    """Turn a failed write of rows to stdout (a full disk behind it) into an :class:`OutputError`; a closed
-    pipe (``| head``: BrokenPipeError; see :func:`reader_left`) passes through as BrokenPipeError for the caller
-    to end quietly."""
+def stdout_errors(what: str | None = "the rows"):
+    """Turn a failed write of ``what`` (None: anything) to stdout (a full disk behind it, a character its encoding lacks) into an
+    :class:`OutputError`; a closed pipe (``| head``: BrokenPipeError; see :func:`reader_left`) passes through as
+    BrokenPipeError for the caller to end quietly."""
+    failed = f"cannot write {what} to stdout" if what else "cannot write to stdout"
     try:
         yield
     except BrokenPipeError:
@@ -227,10 +228,10 @@ def stdout_errors():
     except OSError as exc:
         if reader_left(exc):
             raise BrokenPipeError(errno.EPIPE, "Broken pipe") from exc
-        raise OutputError(f"cannot write the rows to stdout: {exc.strerror or exc}") from None
-    except UnicodeEncodeError as exc:  # a video's path in a batch's 'video' column, stdout set to latin-1
+        raise OutputError(f"{failed}: {exc.strerror or exc}") from None
+    except UnicodeEncodeError as exc:  # a path in a batch's 'video' column or eval's table, stdout set to latin-1
         text = exc.object[exc.start:exc.end].encode("ascii", "backslashreplace").decode()
-        raise OutputError(f"cannot write the rows to stdout: its encoding ({exc.encoding}) has no '{text}'; "
+        raise OutputError(f"{failed}: its encoding ({exc.encoding}) has no '{text}'; "
                           f"set PYTHONIOENCODING=utf-8") from None
 
 

@@ -689,6 +689,17 @@ def test_eval_scores_a_run_csv(dataset, tmp_path):
     assert res.exit_code == 0 and res.stdout.splitlines()[2].split()[3] == "100.0"
 
 
+def test_eval_to_a_stdout_that_cannot_encode_its_table_is_one_error_line(dataset, tmp_path):
+    pred = tmp_path / "трек.csv"  # the table names the run
+    _write_run_csv(pred, _TRUTH[(dataset / "alpha.roi").read_text().strip()])
+    env = dict(os.environ, PYTHONIOENCODING="ascii")
+    proc = subprocess.run([sys.executable, "-m", "logpolar_track", "eval", str(pred), str(dataset / "alpha.gt.csv")],
+                          capture_output=True, env=env)
+    assert proc.returncode == 1
+    assert proc.stderr.decode() == ("lptrack: error: cannot write to stdout: its encoding (ascii) has no "
+                                    "'\\u0442\\u0440\\u0435\\u043a'; set PYTHONIOENCODING=utf-8\n")
+
+
 def test_eval_rejects_unreadable_prediction(dataset, tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("frame,cx\n0,1\n")

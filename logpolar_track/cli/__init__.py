@@ -29,7 +29,7 @@ import cv2  # noqa: E402
 from .. import __version__  # noqa: E402
 from ..errors import LptrackError, OutputError, RoiError, UsageError  # noqa: E402
 from ..geometry import ROI_SYNTAX, Ellipse, parse_roi  # noqa: E402
-from ..results import reader_left  # noqa: E402
+from ..results import stdout_errors  # noqa: E402
 from ..video import keep_frames_off_the_heap  # noqa: E402
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -189,14 +189,16 @@ def stdout_reader_left() -> None:
 @contextlib.contextmanager
 def stdout_failures():
     """Writes to stdout within: a reader that left ends lptrack quietly (:func:`stdout_reader_left`); any other
-    failed write (a full disk behind it) is an :class:`OutputError` (one line, exit 1)."""
+    failed write (a full disk behind it, a character the encoding of stdout lacks) is an :class:`OutputError`
+    (one line, exit 1), as :func:`~logpolar_track.results.stdout_errors` words it for the rows of a run."""
     try:
-        yield
-    except OSError as exc:
-        if reader_left(exc):
-            stdout_reader_left()
+        with stdout_errors(None):
+            yield
+    except BrokenPipeError:
+        stdout_reader_left()
+    except OutputError:
         _stdout_to_devnull()
-        raise OutputError(f"cannot write to stdout: {exc.strerror or exc}") from None
+        raise
 
 
 def require_stdout() -> None:

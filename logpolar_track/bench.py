@@ -32,7 +32,7 @@ from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCE
                        auc, score_track, success_curve)
 from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_threads, run_tasks
 from .geometry import Ellipse
-from .look import PLOT_SUFFIXES, check_image_suffix
+from .look import PLOT_SUFFIXES, check_image_suffix, matplotlib_hint
 from .trackers import create_tracker, tracker_class, tracker_names
 from .outputs import writes_in_place, written_into_place
 from .trackers import opencv as _opencv_peers  # noqa: F401  (registers cv-mil, cv-kcf, cv-csrt)
@@ -71,7 +71,7 @@ def resolve_trackers(spec: str | None) -> tuple[list[str], list[tuple[str, str]]
     else:
         names = list(dict.fromkeys(n.strip() for n in spec.split(",") if n.strip()))
         if not names:
-            raise UsageError("--trackers is empty; give comma-separated names from: "
+            raise UsageError("the list of trackers (--trackers) is empty; give comma-separated names from: "
                              + ", ".join(tracker_names(include_unavailable=True)))
     classes = [tracker_class(name) for name in names]  # an unknown name: UsageError, with "did you mean"
     available, skipped = [], []
@@ -676,15 +676,6 @@ def write_text_atomic(path, text: str, *, overwrite: bool = True) -> None:
         temp.write_text(text, encoding="utf-8")
 
 
-def matplotlib_missing() -> str | None:
-    """None if matplotlib can be imported, else a one-line hint on how to install it."""
-    try:
-        import matplotlib  # noqa: F401
-    except ImportError:
-        return "--plot needs matplotlib, which is not installed; install it with: pip install matplotlib"
-    return None
-
-
 def plot_curves(summary: list[dict], path, caption: str | None = None, *, overwrite: bool = True) -> None:
     """Save OTB-style success (IoU) and precision (centre error) plots, one curve per tracker, as a PNG (or PDF
     or SVG, as ``path`` ends), under ``caption`` if given (what was run, e.g. "7 sequences played backwards"),
@@ -700,7 +691,7 @@ def plot_curves(summary: list[dict], path, caption: str | None = None, *, overwr
         If the file cannot be written.
     """
     check_image_suffix(path, PLOT_SUFFIXES, "plot")
-    hint = matplotlib_missing()
+    hint = matplotlib_hint()
     if hint:
         raise UsageError(hint)
     import matplotlib
@@ -751,4 +742,4 @@ def eval_document(pred_path, gt_path, metrics: dict, *, per_frame: bool = True, 
 __all__ = ["run_one", "run_bench", "mean_over_starts", "start_roi", "STARTS", "summarise", "format_table",
            "paired_differences", "format_paired", "auc_per_pass", "format_passes",
            "bench_document", "eval_document", "plot_curves", "resolve_trackers", "collect_sequences",
-           "default_dataset", "write_text_atomic", "matplotlib_missing", "environment", "SCHEMA_VERSION"]
+           "default_dataset", "write_text_atomic", "environment", "SCHEMA_VERSION"]

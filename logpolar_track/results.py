@@ -217,9 +217,9 @@ def read_data_rows(path) -> tuple[list[str], list[tuple[int, list[str]]]]:
 
 @contextlib.contextmanager
 def stdout_errors(what: str | None = "the rows"):
-    """Turn a failed write of ``what`` (None: anything) to stdout (a full disk behind it, a character its encoding lacks) into an
-    :class:`OutputError`; a closed pipe (``| head``: BrokenPipeError; see :func:`reader_left`) passes through as
-    BrokenPipeError for the caller to end quietly."""
+    """Turn a failed write of ``what`` (None: anything) to stdout (a full disk behind it, a character its
+    encoding lacks) into an :class:`OutputError`; a closed pipe (``| head``: BrokenPipeError; see
+    :func:`reader_left`) passes through as BrokenPipeError for the caller to end quietly."""
     failed = f"cannot write {what} to stdout" if what else "cannot write to stdout"
     try:
         yield

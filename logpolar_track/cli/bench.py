@@ -9,11 +9,11 @@ from pathlib import Path
 import click
 
 from ..bench import (STARTS, bench_document, collect_sequences, default_dataset, eval_document, format_paired,
-                     format_passes, format_table, matplotlib_missing, paired_differences, plot_curves, resolve_trackers,
+                     format_passes, format_table, paired_differences, plot_curves, resolve_trackers,
                      run_bench, summarise, write_text_atomic)
 from ..errors import UsageError
 from ..executor import TRACKING_OPENCV_THREADS
-from ..look import PLOT_SUFFIXES, check_image_suffix
+from ..look import PLOT_SUFFIXES, check_image_suffix, matplotlib_hint
 from ..outputs import check_output_path
 from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, PathParam, WholeNumber, check_jobs_or_scheduler, main,
                parse_param_options, require_stdout, write_stdout)
@@ -148,7 +148,7 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
         return
     if plot_out is not None:
         check_image_suffix(plot_out, PLOT_SUFFIXES, "plot")
-        hint = matplotlib_missing()
+        hint = matplotlib_hint()
         if hint:
             raise UsageError(hint)
         check_output_path(plot_out, overwrite=overwrite, what="plot")

@@ -76,7 +76,7 @@ def resolve_trackers(spec: str | None) -> tuple[list[str], list[tuple[str, str]]
     classes = [tracker_class(name) for name in names]  # an unknown name: UsageError, with "did you mean"
     available, skipped = [], []
     for name, cls in zip(names, classes):
-        if getattr(cls, "available", lambda: True)():
+        if cls.available():
             available.append(name)
         else:
             skipped.append((name, cls.unavailable_reason()))

@@ -75,7 +75,7 @@ def _tracker_lines() -> str:
     for name in tracker_names(include_unavailable=True):
         cls = tracker_class(name)
         notes = [n for n, on in (("default", name == DEFAULT_TRACKER),
-                                 ("not installed here", not getattr(cls, "available", lambda: True)())) if on]
+                                 ("not installed here", not cls.available())) if on]
         head = f"{name}" + (f" ({', '.join(notes)})" if notes else "")
         lines.append(f"  {head}")
         lines += textwrap.wrap(cls.summary, width=74, initial_indent="      ", subsequent_indent="      ")

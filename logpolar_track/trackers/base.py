@@ -8,12 +8,13 @@ frame" -- data, not an error -- and ``state`` then holds the last good geometry.
 from __future__ import annotations
 
 import difflib
+import functools
 import inspect
 import math
 import re
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Callable, ClassVar, Iterable
+from typing import ClassVar, Iterable
 
 import numpy as np
 
@@ -59,6 +60,37 @@ class Tracker(ABC):
     summary: ClassVar[str] = ""
     #: Whether ``rotation_deg`` is measured.
     measures_rotation: ClassVar[bool] = True
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        # Every construction checks its keyword tuning against the kinds of its defaults (see _check_kind), made
+        # through create_tracker or with the class itself: LogPolarCorrelationTracker(long_term="false") was True.
+        super().__init_subclass__(**kwargs)
+        init = cls.__dict__.get("__init__")
+        if init is None:
+            return
+        defaults = {p.name: p.default for p in inspect.signature(init).parameters.values()
+                    if p.kind is p.KEYWORD_ONLY and p.default is not p.empty}
+        if not defaults:
+            return
+
+        @functools.wraps(init)  # inspect.signature, and so tracker_parameters, still see the signature
+        def checked_init(self, *args, **params):
+            for key, value in params.items():
+                if key in defaults:
+                    _check_kind(type(self).name or type(self).__name__, key, value, defaults[key])
+            init(self, *args, **params)
+
+        cls.__init__ = checked_init
+
+    @classmethod
+    def available(cls) -> bool:
+        """Whether this install can run the tracker (OpenCV's need the contrib build)."""
+        return True
+
+    @classmethod
+    def unavailable_reason(cls) -> str:
+        """Why :meth:`available` is False, and what to install; '' when it is True."""
+        return ""
 
     @abstractmethod
     def init(self, frame: np.ndarray, roi: Ellipse) -> TrackState:
@@ -277,7 +309,7 @@ def _number(value) -> str:
     return f"{value:g}"
 
 
-_REGISTRY: dict[str, Callable[..., Tracker]] = {}
+_REGISTRY: dict[str, type[Tracker]] = {}
 
 
 def register(cls):
@@ -290,11 +322,11 @@ def register(cls):
 
 def tracker_names(*, include_unavailable: bool = False) -> list[str]:
     """Registered tracker names, in registration order (lptrack's own first)."""
-    return [name for name, cls in _REGISTRY.items() if include_unavailable or getattr(cls, "available", lambda: True)()]
+    return [name for name, cls in _REGISTRY.items() if include_unavailable or cls.available()]
 
 
 def tracker_class(name: str):
-    """The registered class (or factory) called ``name``."""
+    """The registered class called ``name``."""
     try:
         return _REGISTRY[name]
     except KeyError:
@@ -321,13 +353,9 @@ def create_tracker(name: str, **params) -> Tracker:
         An unknown or unavailable tracker, or ``params`` it does not take or accept.
     """
     cls = tracker_class(name)
-    if not getattr(cls, "available", lambda: True)():
+    if not cls.available():
         raise UsageError(f"tracker '{name}' is not available here: {cls.unavailable_reason()}")
-    taken = tracker_parameters(name)
-    for key, value in params.items():
-        if key in taken:
-            _check_kind(name, key, value, taken[key])
-    try:
+    try:  # the parameters' kinds are checked by the construction itself (Tracker.__init_subclass__)
         return cls(**params)
     except LptrackError:
         raise

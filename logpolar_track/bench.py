@@ -27,7 +27,7 @@ import numpy as np
 
 from . import __version__
 from .datasets import SEARCH_DEPTH, Sequence, discover, discover_one
-from .errors import OutputError, RoiError, UsageError
+from .errors import OutputError, RoiError, UsageError, is_whole
 from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
                        auc, score_track, success_curve)
 from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_threads, run_tasks
@@ -288,8 +288,8 @@ def run_bench(sequences: list[Sequence], trackers: list[str], *, params: Mapping
     threads : int or None
         OpenCV's worker threads per tracker (see :func:`run_one`).
     """
-    if not 1 <= starts <= len(STARTS):
-        raise UsageError(f"starts must be 1 to {len(STARTS)}, got {starts}")
+    if not (is_whole(starts) and 1 <= starts <= len(STARTS)):
+        raise UsageError(f"starts must be a whole number from 1 to {len(STARTS)}, got {starts!r}")
     pairs = [(s, t, params, k, threads) for s in sequences for t in trackers for k in range(starts)]
     runs: list[dict | None] = [None] * len(pairs)
     for outcome in run_tasks(_run_pair, pairs, jobs=jobs, scheduler=scheduler):

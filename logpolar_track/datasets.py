@@ -33,7 +33,7 @@ from typing import Iterator
 
 import numpy as np
 
-from .errors import InputError, UsageError, VideoError
+from .errors import InputError, UsageError, VideoError, is_whole
 from .evaluate import GroundTruth, GroundTruthError, read_box_text, read_gt_csv, there_and_back_rows
 from .geometry import Ellipse
 from .pipeline import read_roi_sidecar
@@ -163,8 +163,8 @@ class Sequence:
         UsageError
             ``n`` below 1.
         """
-        if n < 1:
-            raise UsageError(f"every takes a whole number of frames >= 1, got {n}")
+        if not (is_whole(n) and n >= 1):  # 1.5 failed in slicing, True was 1
+            raise UsageError(f"every takes a whole number of frames >= 1, got {n!r}")
         if n == 1:
             return self
         files = None if self.frame_files is None else self.frame_files[self.start::n]
@@ -190,8 +190,8 @@ class Sequence:
         UsageError
             ``passes`` below 1, or a video (only image sequences are played backwards).
         """
-        if passes < 1:
-            raise UsageError(f"passes takes a whole number >= 1, got {passes}")
+        if not (is_whole(passes) and passes >= 1):
+            raise UsageError(f"passes takes a whole number >= 1, got {passes!r}")
         if passes == 1:
             return self
         if self.frame_files is None:

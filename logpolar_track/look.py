@@ -978,9 +978,10 @@ def write_contact_sheet(video_path, run_csv_or_rows, out_png, *, cols: int = 4, 
     if rows is not None and count is not None:
         raise UsageError(f"give rows or count, not both: rows={rows} means {cols} x {rows} frames, count={count} "
                          f"means {count} frames in {cols} columns")
-    cols, rows = int(cols), int(SHEET_ROWS if rows is None else rows)
-    if cols < 1 or rows < 1 or (count is not None and count < 1):
-        raise UsageError("the sheet needs at least 1 column, 1 row and 1 frame")
+    rows = SHEET_ROWS if rows is None else rows
+    for name, value in (("cols", cols), ("rows", rows), ("count", count), ("width", width)):
+        if value is not None:
+            check_frame_number(value, name, low=1)  # 2.5 columns were 2, True 1
     if width < 16 * cols:
         raise UsageError(f"sheet width {width} px is too small for {cols} columns (at least {16 * cols} px)")
     table = _as_table(run_csv_or_rows)
@@ -1019,6 +1020,7 @@ def write_contact_sheet(video_path, run_csv_or_rows, out_png, *, cols: int = 4, 
 
 def sheet_geometry(video_w: int, video_h: int, cols: int, n_frames: int, width: int = 1600) -> dict:
     """Pixel layout of a contact sheet: ``tile`` (w, h), ``label_h``, ``header_h`` and the sheet ``size`` (w, h)."""
+    check_frame_number(cols, "cols", low=1)
     tile_w = max(16, min(int(width) // int(cols), int(video_w)))
     tile_h = max(1, int(round(tile_w * video_h / video_w)))
     label_h = 18

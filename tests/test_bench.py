@@ -218,6 +218,12 @@ def test_bench_json_to_stdout_is_only_json(dataset, tmp_path):
                           "(or --json -) too\n")
 
 
+def test_run_bench_takes_a_whole_number_of_starts(dataset):
+    for starts in (1.5, True, 0, 34):
+        with pytest.raises(UsageError, match=f"starts must be a whole number from 1 to 33, got {starts!r}"):
+            run_bench(discover(dataset), ["fixed"], starts=starts)
+
+
 def test_run_bench_in_processes_keeps_order_and_numbers(dataset):
     seqs = discover(dataset)
     pickle.dumps((seqs, run_one))  # what a process pool (or a Dask cluster) has to ship

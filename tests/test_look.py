@@ -595,6 +595,17 @@ def test_write_contact_sheet_accepts_results(tiny_run, tmp_path):
     assert png_size(out) == (300, 28 + 75 + 18)
 
 
+def test_contact_sheet_grid_takes_whole_numbers(tiny_run, tmp_path):
+    """From Python, cols=2.5 made 2 columns and cols=True 1; sheet_geometry(cols=0) divided by zero."""
+    video, run_csv, _ = tiny_run
+    for grid in ({"cols": 2.5}, {"cols": True}, {"rows": 0}, {"count": 1.5, "cols": 2}, {"width": 300.5}):
+        with pytest.raises(UsageError, match=f"{next(iter(grid))} must be a whole number >= 1"):
+            write_contact_sheet(video.path, run_csv, tmp_path / "s.png", **grid)
+    with pytest.raises(UsageError, match="cols must be a whole number >= 1, got 0"):
+        sheet_geometry(160, 120, 0, 4)
+    assert not (tmp_path / "s.png").exists()
+
+
 def test_sheet_and_plot_fail_cleanly_on_a_csv_off_contract(tiny_run, tmp_path):
     video, run_csv, _ = tiny_run
     for name, path in bad_csvs(tmp_path, run_csv).items():

@@ -6,7 +6,8 @@ frame) and :func:`run_video` (what ``lptrack run`` does: annotated video and CSV
 
 import importlib
 
-from .errors import InputError, LptrackError, NotStartedError, OutputError, RoiError, UsageError, VideoError
+from .errors import (FrameRangeError, GroundTruthError, InputError, LptrackError, NotStartedError, OutputError,
+                     RoiError, UsageError, VideoError)
 
 #: Public names imported on first use (PEP 562): ``import logpolar_track`` (and so the ``lptrack`` script, see
 #: :mod:`logpolar_track.__main__`) does not wait for NumPy and OpenCV, and a Ctrl-C during those imports can be
@@ -17,7 +18,7 @@ _LAZY = {"Ellipse": "geometry", "parse_roi": "geometry", "Tracker": "trackers", 
 
 __all__ = ["Ellipse", "parse_roi", "Tracker", "TrackState", "create_tracker", "tracker_names", "track_video",
            "run_video", "LptrackError", "RoiError", "VideoError", "InputError", "OutputError", "UsageError",
-           "NotStartedError", "__version__"]
+           "NotStartedError", "FrameRangeError", "GroundTruthError", "__version__"]
 
 
 def __getattr__(name: str):

@@ -70,6 +70,13 @@ class NotStartedError(UsageError, RuntimeError):
     exit_code = 2
 
 
+class GroundTruthError(LptrackError):
+    """A ground-truth file or a run's CSV cannot be read as such (missing, wrong columns, not numbers, off the
+    CSV contract)."""
+
+    exit_code = 1
+
+
 class FrameRangeError(VideoError, UsageError):
     """A frame index or time given as an argument lies outside the video (bad usage for this video)."""
 

@@ -62,7 +62,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import LptrackError, UsageError, is_real
+from .errors import GroundTruthError, UsageError, is_real
 from .geometry import Ellipse, ellipse_in_rotated_rect
 from .results import off_contract
 
@@ -76,12 +76,6 @@ SUCCESS_RADIUS_FRACTION = 0.25
 PRECISION_PX = 20.0
 
 GT_CSV_COLUMNS = ("frame", "cx", "cy", "a", "b", "angle_deg", "scale", "rotation_deg")
-
-
-class GroundTruthError(LptrackError):
-    """A ground-truth or prediction file cannot be read (missing, wrong columns, not numbers)."""
-
-    exit_code = 1
 
 
 # ----------------------------------------------------------------------------------------------------------

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO
 
-from .errors import OutputError
+from .errors import OutputError, UsageError
 from .geometry import wrap_degrees
 from .trackers.base import TrackState
 from .outputs import check_output_path, temporary_path, writes_in_place, written_into_place
@@ -277,7 +277,7 @@ class CsvWriter:
     def __init__(self, target, *, overwrite: bool = False, stream: IO[str] | None = None,
                  data_format: str = "csv", video: str | None = None, header: bool = True):
         if data_format not in FORMATS:
-            raise ValueError(f"data_format must be one of {tuple(FORMATS)}, got {data_format!r}")
+            raise UsageError(f"data_format must be one of {tuple(FORMATS)}, got {data_format!r}")
         self.data_format = data_format
         self.video = video
         self._prefix = "" if video is None else _csv_field(video) + ","

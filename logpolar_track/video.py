@@ -679,14 +679,15 @@ class VideoWriter:
     def __init__(self, path, fps: float, *, overwrite: bool = False):
         wanted = Path(path)
         suffix = wanted.suffix.lower()
+        # Arguments it cannot take are a UsageError, as run_video's own check of them says.
         if suffix not in CODECS_BY_EXTENSION:
-            raise OutputError(f"cannot write output video '{wanted}': unsupported extension '{wanted.suffix}'; "
-                              f"use one of {', '.join(CODECS_BY_EXTENSION)}")
-        if not (math.isfinite(fps) and fps > 0):
-            raise OutputError(f"cannot write output video '{wanted}': frame rate must be > 0, got {fps}")
+            raise UsageError(f"cannot write output video '{wanted}': unsupported extension '{wanted.suffix}'; "
+                             f"use one of {', '.join(CODECS_BY_EXTENSION)}")
+        if not (is_real(fps) and math.isfinite(fps) and fps > 0):
+            raise UsageError(f"cannot write output video '{wanted}': frame rate must be > 0, got {fps!r}")
         if fps < MIN_VIDEO_FPS:  # refused now, not after the whole run was tracked
-            raise OutputError(f"cannot write output video '{wanted}': {fps:g} frames/s is below the "
-                              f"{MIN_VIDEO_FPS:g} the video encoders take; give a higher --fps, or --no-video")
+            raise UsageError(f"cannot write output video '{wanted}': {fps:g} frames/s is below the "
+                             f"{MIN_VIDEO_FPS:g} the video encoders take; give a higher --fps, or --no-video")
         self.path = check_output_path(wanted, overwrite=overwrite, what="output video")
         self.wanted_path = self.path
         self.fps = float(fps)

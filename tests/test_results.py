@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from logpolar_track.errors import OutputError
+from logpolar_track.errors import OutputError, UsageError
 from logpolar_track.geometry import Ellipse
 from logpolar_track.results import COLUMNS, CsvWriter, FrameResult, format_row, header_line
 from logpolar_track.trackers import TrackState
@@ -174,3 +174,17 @@ def test_a_gone_reader_on_windows_ends_quietly_as_a_broken_pipe(monkeypatch, cap
             raise invalid
     if ends_quietly:
         assert raised.value.code == EXIT_BROKEN_PIPE
+
+
+def test_an_unknown_data_format_is_a_usage_error(tmp_path):
+    """It was a bare ValueError, where every other bad argument is an LptrackError the CLI words as one line."""
+    with pytest.raises(UsageError, match=r"data_format must be one of \('csv', 'jsonl'\), got 'xml'"):
+        CsvWriter(tmp_path / "t.csv", data_format="xml")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_package_exports_every_error_it_raises():
+    import logpolar_track
+    from logpolar_track import errors
+    raised = {name for name, value in vars(errors).items() if isinstance(value, type) and issubclass(value, Exception)}
+    assert raised <= set(logpolar_track.__all__) and all(hasattr(logpolar_track, name) for name in raised)

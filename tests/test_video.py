@@ -522,7 +522,7 @@ def test_writer_refuses_existing_unless_overwrite(tiny_video, tmp_path):
 
 
 def test_a_frame_rate_no_encoder_takes_is_refused_before_any_frame(tmp_path):
-    with pytest.raises(OutputError, match=r"0.001 frames/s is below the 0.002 the video encoders take"):
+    with pytest.raises(UsageError, match=r"0.001 frames/s is below the 0.002 the video encoders take"):
         VideoWriter(tmp_path / "out.mp4", 0.001)
     with VideoWriter(tmp_path / "slow.mp4", 0.002) as writer:  # the lowest taken
         writer.write(np.zeros((48, 64, 3), np.uint8))
@@ -549,7 +549,7 @@ def test_writer_bad_folder(tmp_path, where, fragment):
 
 
 def test_writer_rejects_unknown_extension_and_size_change(tiny_video, tmp_path):
-    with pytest.raises(OutputError, match="unsupported extension"):
+    with pytest.raises(UsageError, match="unsupported extension"):
         VideoWriter(tmp_path / "out.txt", 30.0)
     writer = VideoWriter(tmp_path / "out.avi", 30.0)
     writer.write(tiny_video.frames[0])

@@ -54,16 +54,6 @@ def _bin_tables(n_orient: int) -> tuple[np.ndarray, np.ndarray]:
 _BIN_TABLES: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
 
-def gradient_channels(gray: np.ndarray, n_orient: int = 6, blur_sigma: float = 1.0) -> np.ndarray:
-    """Oriented gradient energy of a float32 grey patch, shape ``(n_orient, H, W)``, float32.
-
-    Orientation is unsigned (0 to 180 degrees). Each channel is normalised by the patch's mean gradient
-    magnitude so a brightness gain does not change the features.
-    """
-    channels, norm = _orientation_channels(gray, n_orient, blur_sigma)
-    return channels.transpose(2, 0, 1) / norm
-
-
 def patch_features(gray: np.ndarray, n_orient: int = 6, window: np.ndarray | None = None) -> np.ndarray:
     """Features of a grey patch: ``(1 + n_orient, H, W)`` float32, grey normalised to zero mean, unit std.
 

@@ -22,17 +22,12 @@ from .draw import draw_state
 from .errors import LptrackError, OutputError, RoiError, UsageError
 from .executor import TRACKING_OPENCV_THREADS, opencv_threads
 from .geometry import ROI_SYNTAX, Ellipse, as_ellipse, check_roi_fits, parse_roi
-from . import trackers as _trackers
 from .logpolar import within_0_255
 from .results import CsvWriter, FrameResult
-from .trackers import Tracker, create_tracker
+from .trackers import DEFAULT_TRACKER, Tracker, create_tracker
 from .outputs import check_output_path, writes_in_place
 from .video import (CODECS_BY_EXTENSION, VideoReader, VideoWriter, check_frame_number, frames_to_track,
                     is_image_sequence, video_stem)
-
-#: Tracker used when none is named: the registry's choice (``trackers.DEFAULT_TRACKER``) when it makes one,
-#: else ``fixed``. Read from one place so the CLI, the docs and the library agree.
-DEFAULT_TRACKER: str = getattr(_trackers, "DEFAULT_TRACKER", "fixed")
 
 #: Suffixes appended to the video's stem for the default output names.
 VIDEO_OUT_SUFFIX = ".lptrack.mp4"

@@ -33,6 +33,7 @@ import cv2
 import numpy as np
 
 from .errors import LptrackError, OutputError, UsageError
+from .evaluate import GT_CSV_COLUMNS
 from .outputs import written_into_place
 from .geometry import Ellipse, wrap_degrees
 from .synthetic import Pose, random_texture
@@ -45,8 +46,8 @@ SIZE = (640, 480)
 N_FRAMES = 150
 #: Seed used by ``lptrack samples`` unless ``--seed`` says otherwise.
 DEFAULT_SEED = 0
-#: Columns of ``<name>.gt.csv``, in order (the run CSV's geometry columns).
-GT_COLUMNS = ("frame", "cx", "cy", "a", "b", "angle_deg", "scale", "rotation_deg")
+#: Columns of ``<name>.gt.csv``, in order (the run CSV's geometry columns): those the reader reads.
+GT_COLUMNS = GT_CSV_COLUMNS
 #: Time steps per frame interval at which trajectories are tabulated (sub-frame poses for motion blur).
 OVERSAMPLE = 16
 

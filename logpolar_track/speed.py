@@ -82,12 +82,6 @@ def time_updates(name: str, frames: list[np.ndarray], roi: Ellipse, *, repeats: 
     return times, cpu / max(sum(times), 1e-12)
 
 
-def time_tracker(name: str, frames: list[np.ndarray], roi: Ellipse, *, repeats: int = 1, **params) -> float:
-    """Seconds per ``update()`` of tracker ``name`` over ``frames`` (after ``init`` on the first): each pass's
-    mean, and the least over ``repeats`` passes (see :func:`_least_pass`)."""
-    return _least_pass(name, frames, roi, repeats, **params)[0]
-
-
 def _least_pass(name: str, frames: list[np.ndarray], roi: Ellipse, repeats: int,
                 **params) -> tuple[float, float, float]:
     """Least over ``repeats`` passes (a new tracker each) of the mean ``update()`` seconds, the least of their
@@ -419,13 +413,6 @@ def format_report(doc: dict) -> str:
               f"CPUs; Python {v['python']}, "
               f"OpenCV {v['opencv']} ({v['opencv_package']}), NumPy {v['numpy']}, lptrack {v['lptrack']}."]
     return "\n".join(lines) + "\n"
-
-
-def speed_table(trackers: list[str] | None = None, *, n_frames: int = 100, repeats: int = 1,
-                threads: int = 1) -> tuple[list[dict], str]:
-    """:func:`speed_report`'s tracker rows and its text (:func:`format_report`)."""
-    doc = speed_report(trackers, n_frames=n_frames, repeats=repeats, threads=threads)
-    return doc["trackers"], format_report(doc)
 
 
 def frames_from_environment(default: int = 100) -> int:

@@ -196,7 +196,8 @@ class SimilarityTracker(Tracker):
 
     @abstractmethod
     def _estimate(self, gray: np.ndarray, last: Similarity) -> Similarity | None:
-        """Estimate the object's similarity in ``gray`` starting from the last good estimate."""
+        """Estimate the object's similarity in ``gray``; ``last`` is the last good estimate (a tracker may search
+        from its own latest one instead, reported lost or not: ``lpcf`` does)."""
 
     def _accept(self, estimate: Similarity) -> None:
         """Hook called with every estimate accepted as tracked (e.g. to update a template)."""

@@ -31,7 +31,7 @@ from typing import IO, Callable, Iterable, Mapping, Sequence
 
 from .errors import LptrackError, RoiError, UsageError, VideoError
 from .executor import TaskOutcome, run_tasks
-from .geometry import ROI_SYNTAX, Ellipse, parse_roi
+from .geometry import NUMBER_RULE, ROI_SYNTAX, Ellipse, parse_number, parse_roi
 from .pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, mirrored_path, read_roi_sidecar,
                        read_roi_text, run_video)
 from .results import FORMATS, header_line
@@ -324,14 +324,6 @@ def _video_listing(stream) -> str:
 _BINARY_SAMPLE, _BINARY_SHARE, _BINARY_MIN = 65536, 0.05, 16
 
 
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
 def read_roi_file(path) -> list[RoiEntry]:
     """The entries of a ROI file, in file order.
 
@@ -374,14 +366,19 @@ def read_roi_file(path) -> list[RoiEntry]:
             start_text = rest[0] if rest else ""
             tracker = rest[1] if len(rest) > 1 and rest[1] else None
             tracker_hint = " (for a tracker and no start frame, leave the column empty: video,\"roi\",,tracker)"
+            taken = ""
         else:
             # An unquoted ROI spreads over 3 or 5 columns; a start frame is a 4th or 6th number, and a tracker
-            # name, not being a number, can only be the last column.
+            # name, not being a number (as parse_roi reads numbers: 1_0, nan and inf are none), can only be the last
+            # column.
             values = [v.strip() for v in row[1:] if v.strip()]
-            tracker = values.pop() if values and not _is_number(values[-1]) else None
+            tracker = values.pop() if values and parse_number(values[-1]) is None else None
             start_text = values.pop() if len(values) in (4, 6) else ""
+            # Said where the line is refused: '1_0', nan or inf meant as a number read as a tracker's name.
+            taken = "" if tracker is None else (f" (the last column, '{tracker}', is not a number ({NUMBER_RULE}), "
+                                                f"so it is read as a tracker's name)")
             if len(values) not in (3, 5):
-                raise UsageError(f"{where}: expected {expected}, got '{','.join(row)}'")
+                raise UsageError(f"{where}: expected {expected}, got '{','.join(row)}'{taken}")
             roi_text, tracker_hint = ",".join(values), ""
         start_frame = None
         if start_text:
@@ -397,7 +394,7 @@ def read_roi_file(path) -> list[RoiEntry]:
             try:
                 tracker_class(tracker)  # an unknown name is a UsageError listing the known ones
             except UsageError as exc:
-                raise UsageError(f"{where}: in the tracker column, {exc}") from None
+                raise UsageError(f"{where}: in the tracker column, {exc}{taken}") from None
         video = Path(video_text)
         if not video.is_absolute():
             video = path.parent / video

@@ -1,4 +1,5 @@
-"""Ground truth readers and accuracy metrics, shared by ``lptrack bench`` and ``lptrack eval``.
+"""Ground truth readers and accuracy metrics, shared by ``lptrack bench`` and ``lptrack eval``, and the one reader
+of a run's CSV (:func:`read_run_csv`), which ``eval``, ``plot`` and ``sheet`` share.
 
 Conventions
 -----------
@@ -59,12 +60,14 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Iterable
 
 import numpy as np
 
 from .errors import GroundTruthError, UsageError, is_real
-from .geometry import Ellipse, ellipse_in_rotated_rect
-from .results import off_contract
+from .geometry import Ellipse, ellipse_in_rotated_rect, parse_number
+from .results import COLUMNS, VIDEO_COLUMN, FrameResult, off_contract, read_data_rows
+from .trackers.base import TrackState
 
 #: IoU thresholds of the OTB success plot.
 IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
@@ -540,8 +543,6 @@ def _float(text) -> float:
 def read_data_file(path, what: str, hint: str = "") -> tuple[list[str], list[tuple[int, list[str]]]]:
     """:func:`~logpolar_track.results.read_data_rows` (a CSV file, or JSON lines as ``lptrack run`` writes them),
     its failures raised as :class:`GroundTruthError` naming ``what`` the file is, and ``hint`` on a bad line."""
-    from .results import read_data_rows  # here, not at the top: results imports the trackers (OpenCV)
-
     try:
         return read_data_rows(path)
     except (OSError, UnicodeDecodeError) as exc:
@@ -655,15 +656,75 @@ class Track:
         return np.column_stack([e[:, 0], e[:, 1], 2 * hw, 2 * hh, np.zeros(len(e))])
 
 
-RUN_CSV_REQUIRED = ("frame", "cx", "cy", "a", "b", "angle_deg")
+# ----------------------------------------------------------------------------------------------------------
+# A run's CSV: the one reader of it (plot, sheet and eval)
+# ----------------------------------------------------------------------------------------------------------
+
+@dataclass
+class RunTable:
+    """A run CSV as arrays, one entry per row (the contract's columns, :data:`~logpolar_track.results.COLUMNS`).
+
+    Attributes
+    ----------
+    frames : ndarray of int
+    time_s : ndarray
+        Seconds.
+    ellipses : ndarray, shape (n, 5)
+        ``(cx, cy, a, b, angle_deg)`` pixels / degrees CCW on screen.
+    scale, rotation_deg, score : ndarray
+        ``rotation_deg`` is NaN where the tracker does not measure rotation.
+    status : list of str
+    source : str
+        File name, for messages.
+    """
+
+    frames: np.ndarray
+    time_s: np.ndarray
+    ellipses: np.ndarray
+    scale: np.ndarray
+    rotation_deg: np.ndarray
+    score: np.ndarray
+    status: list
+    source: str = "run"
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+    @property
+    def lost(self) -> np.ndarray:
+        return np.array([s == "lost" for s in self.status], bool)
+
+    def track(self) -> Track:
+        """The same rows as :class:`~logpolar_track.evaluate.Track`, for scoring against ground truth."""
+        return Track(self.frames, self.ellipses, self.scale, self.rotation_deg, self.score, list(self.status))
+
+    def result(self, i: int) -> FrameResult:
+        """Row ``i`` as a :class:`~logpolar_track.results.FrameResult`."""
+        rot = float(self.rotation_deg[i])
+        state = TrackState(Ellipse(*(float(v) for v in self.ellipses[i])), float(self.scale[i]),
+                           rot if math.isfinite(rot) else None, float(self.score[i]))
+        return FrameResult(int(self.frames[i]), float(self.time_s[i]), state, self.status[i])
+
+    @classmethod
+    def from_results(cls, results: Iterable[FrameResult], source: str = "run") -> "RunTable":
+        """A table of :class:`~logpolar_track.results.FrameResult` values (e.g. from ``track_video``)."""
+        results = list(results)
+        if not results:
+            raise UsageError("the run has no rows")
+        ell = np.array([[r.state.ellipse.cx, r.state.ellipse.cy, r.state.ellipse.a, r.state.ellipse.b,
+                         r.state.ellipse.angle_deg] for r in results], float)
+        rot = np.array([math.nan if r.state.rotation_deg is None else r.state.rotation_deg for r in results])
+        return cls(np.array([r.frame for r in results], int), np.array([r.time_s for r in results], float),
+                   ell, np.array([r.state.scale for r in results], float), rot,
+                   np.array([r.state.score for r in results], float), [r.status for r in results], source)
 
 
-def several_videos(path, names: list[str], verb: str, video=None) -> GroundTruthError:
-    """The error for a batch's stream (a ``video`` column) of several ``names`` where one video's run is needed
-    (``verb`` it: "score", "give"), none of them ``video`` if that was given."""
+def several_videos(path, names: list[str], video=None) -> GroundTruthError:
+    """The error for a batch's stream (a ``video`` column) of several ``names`` where one video's run is needed,
+    none of them ``video`` if that was given."""
     shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
-    what = (f"choose one with --video VIDEO, or {verb} one video's run" if video is None
-            else f"none of them is '{video}'; {verb} one video's run")
+    what = ("choose one with --video VIDEO, or give one video's run" if video is None
+            else f"none of them is '{video}'; give one video's run")
     return GroundTruthError(f"run CSV '{path}' holds the rows of {len(names)} videos ({shown}: its 'video' "
                             f"column); {what} (its own CSV, as --out-dir writes them)")
 
@@ -682,78 +743,100 @@ def same_file(name: str, video, stream=None) -> bool:
         return False
 
 
-def read_track_csv(path, video=None) -> Track:
-    """Read a run CSV (``frame,time_s,cx,cy,a,b,angle_deg,scale,rotation_deg,score,status``) as predictions.
+def _one_video(path: Path, header: list[str], body: list, video) -> tuple[list[str], list]:
+    """The header and rows of one video of a batch's stream (``video`` its first column), without that column:
+    the only video, or the one whose name is the file ``video``. Its videos' frame numbers overlap, so one video's
+    rows are read, never all of them (eval scored them all against the first one's ground truth)."""
+    names = list(dict.fromkeys(row[0].strip() for _, row in body if row))
+    chosen = names[0] if len(names) == 1 else None
+    if chosen is None and video is not None:
+        chosen = next((name for name in names if same_file(name, video, path)), None)
+    if chosen is None:
+        raise several_videos(path, names, video)
+    return header[1:], [(line, row[1:]) for line, row in body if row and row[0].strip() == chosen]
 
-    A batch's stream (``lptrack run a.mp4 b.mp4 --csv -``, a leading ``video`` column) gives the rows of its only
-    video, or of the one whose ``video`` names the file ``video`` (a path).
 
-    Empty, ``n/a`` or ``nan`` fields become NaN (e.g. ``rotation_deg`` of trackers that do not measure it);
-    missing ``scale``/``score`` default to 1. Without a ``status`` column (or with it empty throughout: another
-    tool's file) the track has no statuses (``status`` is empty) and its ``lost_rate`` and ``off_tracked_rate`` are
-    NaN; an empty field among others is ``tracked``.
+#: The columns of a run CSV that hold a number in every row, and the columns among them that must be > 0.
+_NUMBER_COLUMNS = ("time_s", "cx", "cy", "a", "b", "angle_deg", "scale", "score")
+_POSITIVE_COLUMNS = ("a", "b")
+
+
+def read_run_csv(path, video=None) -> RunTable:
+    """Read a run CSV (or its JSON lines, as ``lptrack run`` writes them) and check that it follows the contract:
+    the one reader of a run's file, for ``plot``, ``sheet`` and ``eval`` alike.
+
+    The header must start with :data:`~logpolar_track.results.COLUMNS` in order (later columns, appended by
+    newer versions, are ignored); every row needs a whole number ``frame`` >= 0 (digits only; increasing), a
+    finite number in ``time_s``, ``cx``, ``cy``, ``a``, ``b`` (> 0), ``angle_deg``, ``scale`` and ``score`` (0 to
+    1), a finite number or nothing in ``rotation_deg``, and a ``status`` among ``init``, ``tracked``, ``lost``.
+    Numbers are read as :func:`~logpolar_track.geometry.parse_number` reads them (no ``nan``, ``inf`` or ``_``).
+
+    A batch's stream (``lptrack run a.mp4 b.mp4 --csv -``) leads with a ``video`` column: its rows of one video are
+    taken, the only one, or the one whose ``video`` names the file ``video`` (a path; see :func:`same_file`).
+    ``'-'`` reads stdin.
 
     Raises
     ------
     GroundTruthError
-        Unreadable file, missing columns, fields that are not numbers, frames that do not increase, the rows of
-        several videos (a batch's stream, with its ``video`` column) none of them ``video``, a ``status`` other
-        than ``init``, ``tracked`` and ``lost``, or a ``score`` outside [0, 1].
+        (exit code 1) Unreadable file, or the first place where it departs from the contract: line number,
+        column, value, and what is accepted; a batch's stream of several videos, none of them ``video``.
     """
-    rows, header, lines = _read_csv_columns(path, RUN_CSV_REQUIRED, "run CSV")
-    if not rows:
+    path = Path(path)
+    expected = ",".join(COLUMNS)
+    hint = f"expected an lptrack run CSV with the header {expected}, or its JSON lines"
+    header, body = read_data_file(path, "run CSV", hint)
+    if header[:1] == [VIDEO_COLUMN]:
+        header, body = _one_video(path, header, body, video)
+    if not header:
+        raise GroundTruthError(f"run CSV '{path}' is empty; {hint}")
+    if tuple(header[:len(COLUMNS)]) != COLUMNS:
+        got = ",".join(header)[:80]
+        raise GroundTruthError(f"run CSV '{path}' has the header '{got}'; {hint}")
+    if not body:
         raise GroundTruthError(f"run CSV '{path}' has a header but no rows")
-    videos = list(dict.fromkeys(str(r.get("video")) for r in rows)) if "video" in header else []
-    if len(videos) > 1:
-        # A batch's stream: its videos' frame numbers overlap, so one video's rows are scored, never all of them
-        # against the first one's ground truth.
-        chosen = None if video is None else next((name for name in videos if same_file(name, video, path)), None)
-        if chosen is None:
-            raise several_videos(path, videos, "score", video)
-        kept = [(line, row) for line, row in zip(lines, rows) if str(row.get("video")) == chosen]
-        lines, rows = [line for line, _ in kept], [row for _, row in kept]
-    for line, row in zip(lines, rows):
-        if None in row.values():  # a row cut short (a file copied while it was written, or cut with head -c)
-            fields = sum(value is not None for value in row.values())
-            raise GroundTruthError(f"run CSV '{path}' line {line} has {fields} fields; expected {len(header)} "
-                                   f"({','.join(header)})")
+    table: dict[str, list] = {c: [] for c in COLUMNS}
+    for line, row in body:
+        if len(row) < len(COLUMNS):  # a row cut short (a file copied while it was written, or cut with head -c)
+            raise GroundTruthError(f"run CSV '{path}' line {line} has {len(row)} fields; expected "
+                                   f"{len(COLUMNS)} ({expected})")
+        fields = dict(zip(COLUMNS, (f.strip() for f in row)))
 
-    def numbers(column: str, default: str | None = None) -> np.ndarray:
-        values = []
-        for line, row in zip(lines, rows):
-            text = row.get(column, default)
-            try:
-                values.append(_float(text))
-            except ValueError:
-                raise GroundTruthError(f"run CSV '{path}' line {line}: {column} '{text}' is not a number") from None
-        return np.array(values, float)
-
-    frame_numbers = numbers("frame")
-    bad_frame = np.flatnonzero(~np.isfinite(frame_numbers) | (frame_numbers != np.round(frame_numbers))
-                               | (frame_numbers < 0))
-    if bad_frame.size:
-        raise GroundTruthError(f"run CSV '{path}' line {lines[bad_frame[0]]}: frame '{rows[bad_frame[0]]['frame']}' "
-                               f"is not a frame index (integer >= 0)")
-    frames = frame_numbers.astype(int)
-    ell = np.column_stack([numbers(c) for c in ("cx", "cy", "a", "b", "angle_deg")])
-    scale, rot, score = numbers("scale", "1"), numbers("rotation_deg"), numbers("score", "1")
-    back = np.flatnonzero(np.diff(frames) <= 0)
-    if back.size:
-        line = lines[back[0] + 1]
-        raise GroundTruthError(f"run CSV '{path}' line {line}: frame {frames[back[0] + 1]} does not follow frame "
-                               f"{frames[back[0]]}; a run's frames increase")
-    status = [(r.get("status") or "tracked").strip() for r in rows]
-    # The metrics use neither, but a status or score outside the contract is a file that went wrong (a typo, a
-    # column shifted), as plot and sheet say too; an empty score (another tool's file) may stand.
-    for line, row, value, level in zip(lines, rows, status, score):
-        broken = off_contract(value, level)
+        def bad(column: str, what: str) -> GroundTruthError:
+            return GroundTruthError(f"run CSV '{path}' line {line}: {column} '{fields[column]}' is not {what}")
+        text = fields["frame"]
+        if not (text.isascii() and text.isdigit()):  # int() takes '1_0' and ' 1', float() '1.0'
+            raise bad("frame", "a frame index (integer >= 0)")
+        frame = int(text)
+        if table["frame"] and frame <= table["frame"][-1]:
+            raise GroundTruthError(f"run CSV '{path}' line {line}: frame {frame} does not follow frame "
+                                   f"{table['frame'][-1]}; a run's frames increase")
+        table["frame"].append(frame)
+        for column in _NUMBER_COLUMNS:
+            value = parse_number(fields[column])
+            if value is None:
+                raise bad(column, "a number" + (" > 0" if column in _POSITIVE_COLUMNS else ""))
+            if column in _POSITIVE_COLUMNS and value <= 0:
+                raise bad(column, "a number > 0")
+            table[column].append(value)
+        rotation = fields["rotation_deg"]
+        value = parse_number(rotation) if rotation else math.nan
+        if value is None:
+            raise bad("rotation_deg", "a number or empty (a tracker that does not measure rotation)")
+        table["rotation_deg"].append(value)
+        broken = off_contract(fields["status"], table["score"][-1])
         if broken is not None:
-            column, what = broken
-            text = value if column == "status" else row.get("score")
-            raise GroundTruthError(f"run CSV '{path}' line {line}: {column} '{text}' is not {what}")
-    if "status" not in header or not any((r.get("status") or "").strip() for r in rows):
-        status = []  # not said: how often it was lost, or wrong while tracked, is not known
-    return Track(frames, ell, scale, rot, score, status)
+            raise bad(*broken)
+        table["status"].append(fields["status"])
+    t = {c: np.asarray(v, float) for c, v in table.items() if c not in ("frame", "status")}
+    return RunTable(np.asarray(table["frame"], int), t["time_s"],
+                    np.column_stack([t["cx"], t["cy"], t["a"], t["b"], t["angle_deg"]]), t["scale"],
+                    t["rotation_deg"], t["score"], table["status"], path.name)
+
+
+def read_track_csv(path, video=None) -> Track:
+    """A run CSV read by :func:`read_run_csv` (the same checks, the same messages), as the :class:`Track` that
+    :func:`score_track` scores: ``read_run_csv(path, video).track()``."""
+    return read_run_csv(path, video).track()
 
 
 # ----------------------------------------------------------------------------------------------------------

@@ -14,6 +14,7 @@ This module needs no OpenCV.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -193,6 +194,60 @@ def _fmt(value: float) -> str:
     return f"{value:.3f}".rstrip("0").rstrip(".")
 
 
+#: A number as lptrack reads one from text: a sign, digits with a decimal point or not, an exponent (``12``,
+#: ``-3.5``, ``.5``, ``1e3``). What ``float()`` takes beyond that is refused: ``1_40`` (a typo for 140 as often as
+#: not), ``nan`` and ``inf`` (no position). A minus sign copied from typeset text (U+2212) is a minus.
+_PLAIN_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+#: What :func:`parse_number` accepts, for messages.
+NUMBER_RULE = "plain decimals such as 12, -3.5 or 1e3; no '_', nan or inf"
+
+
+def parse_number(text: str) -> float | None:
+    """The number ``text`` holds (spaces around it allowed), or None if it holds none by lptrack's rule
+    (:data:`NUMBER_RULE`): a sign, digits with or without a decimal point, an exponent; the typeset minus sign
+    (U+2212) as a minus. Underscores (``1_40``), ``nan``, ``inf`` and numbers too large for a float (``1e999``) are
+    none."""
+    field = str(text).strip().replace("\u2212", "-")
+    if not _PLAIN_NUMBER.fullmatch(field):
+        return None
+    value = float(field)
+    return value if math.isfinite(value) else None
+
+
+def parse_numbers(text: str, what: str, expected: str) -> list[float]:
+    """The numbers of the comma-separated list ``text`` (spaces around them allowed), each read by
+    :func:`parse_number`: the one reader of a list of numbers given as text (a ROI, a box, points).
+
+    Parameters
+    ----------
+    text : str
+    what : str
+        What the list is, for messages (``"ROI"``, ``"box"``).
+    expected : str
+        What is accepted, for messages (``"x,y,w,h (top-left corner and size in pixels)"``).
+
+    Raises
+    ------
+    RoiError
+        An empty text, numbers not separated by commas, an empty field (a stray comma), or a field that is not a
+        number by :data:`NUMBER_RULE` (named in the message). The count of numbers is the caller's to check.
+    """
+    text = str(text).strip()
+    if not text:
+        raise RoiError(f"the {what} is empty; expected {expected}")
+    fields = [f.strip() for f in text.split(",")]
+    if len(fields) == 1 and len(text.replace(";", " ").split()) > 1:
+        raise RoiError(f"{what} '{text}': separate the numbers with commas; expected {expected}")
+    if "" in fields and len(fields) > 1:
+        raise RoiError(f"{what} '{text}' has an empty field (a stray comma?); expected {expected}")
+    values = [parse_number(f) for f in fields]
+    bad = next((f for f, v in zip(fields, values) if v is None), None)
+    if bad is not None:
+        raise RoiError(f"{what} '{text}' is not a list of numbers: '{bad}' is not a number (give {NUMBER_RULE}); "
+                       f"expected {expected}")
+    return values
+
+
 def parse_roi(spec: str) -> Ellipse:
     """Parse a ROI given as ``cx,cy,r`` or ``cx,cy,a,b,angle``.
 
@@ -209,31 +264,16 @@ def parse_roi(spec: str) -> Ellipse:
     Raises
     ------
     RoiError
-        If the text has the wrong number of fields, a field is not a finite number, or a radius is not > 0.
+        If the text has the wrong number of fields, a field is not a number by :func:`parse_numbers`'s rule (plain
+        decimals, the typeset minus sign as a minus; no ``_``, ``nan`` or ``inf``), or a radius is not > 0.
 
     Notes
     -----
     The angle may be any finite number of degrees; it is wrapped into (-180, 180].
     """
-    text = str(spec).strip()
-    if not text:
-        raise RoiError(f"the ROI is empty; expected {ROI_SYNTAX}")
-    # A minus sign copied from typeset text (U+2212) is a minus.
-    fields = [f.strip().replace("\u2212", "-") for f in text.split(",")]
-    if len(fields) == 1 and len(text.replace(";", " ").split()) > 1:
-        raise RoiError(f"ROI '{spec}': separate the numbers with commas; expected {ROI_SYNTAX}")
-    if "" in fields and len(fields) > 1:
-        raise RoiError(f"ROI '{spec}' has an empty field (a stray comma?); expected {ROI_SYNTAX}")
-    try:
-        if any("_" in f for f in fields):  # float() takes 1_40 for 140: a typo, not a number
-            raise ValueError
-        values = [float(f) for f in fields]
-    except ValueError:
-        raise RoiError(f"ROI '{spec}' is not a list of numbers; expected {ROI_SYNTAX}") from None
+    values = parse_numbers(spec, "ROI", ROI_SYNTAX)
     if len(values) not in (3, 5):
         raise RoiError(f"ROI '{spec}' has {counted(len(values), 'number')}; expected {ROI_SYNTAX}")
-    if not all(math.isfinite(v) for v in values):
-        raise RoiError(f"ROI '{spec}' contains a non-finite number; expected {ROI_SYNTAX}")
     if len(values) == 3:
         cx, cy, r = values
         if r <= 0:

@@ -12,7 +12,8 @@ Before a run (headless OpenCV has no ``selectROI``), the user needs the pixel co
 
 After a run:
 
-* :func:`read_run_csv` -- a run CSV checked against the contract (:data:`~logpolar_track.results.COLUMNS`);
+* :func:`read_run_csv` -- a run CSV checked against the contract (:data:`~logpolar_track.results.COLUMNS`): the
+  reader ``lptrack eval`` uses too (:func:`logpolar_track.evaluate.read_run_csv`, here by that name as well);
 * :func:`plot_track` -- a matplotlib figure (optional extra ``plot``): centre path over the first frame,
   scale, rotation and score against time, and with ground truth its overlay and the errors;
 * :func:`write_contact_sheet` -- a grid of evenly spaced annotated frames (pure OpenCV, one pass over the
@@ -30,7 +31,7 @@ import os
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Sequence
 
 import cv2
 import numpy as np
@@ -38,11 +39,10 @@ import numpy as np
 from .datasets import load_ground_truth
 from .draw import LOST_COLOUR, TRACKED_COLOUR, draw_state
 from .errors import FrameRangeError, OutputError, RoiError, UsageError, VideoError, counted, is_real
-from .evaluate import (GroundTruthError, Track, read_data_file, rotation_errors, same_file, scale_errors, score_track,
-                       several_videos)
-from .geometry import Ellipse, as_ellipse, check_roi_fits, ellipse_in_box
+from .evaluate import RunTable, read_run_csv, rotation_errors, scale_errors, score_track
+from .geometry import Ellipse, as_ellipse, check_roi_fits, ellipse_in_box, parse_numbers
 from .logpolar import to_bgr
-from .results import COLUMNS, FrameResult, off_contract
+from .results import FrameResult
 from .trackers.base import TrackState, check_frame
 from .outputs import check_output_path, written_into_place
 from .video import VIDEO_EXTENSIONS, VideoReader, check_frame_number, guess_image_sequence, video_stem
@@ -54,6 +54,9 @@ GRID_COLOUR = (255, 255, 0)
 ROI_COLOUR = (255, 0, 255)
 #: Default relative tolerance under which a fitted ellipse is reported as a circle: ``(a - b) / a``.
 ROUND_TOLERANCE = 0.02
+#: What :func:`roi_from_box` and :func:`roi_from_points` take as text, for messages.
+BOX_SYNTAX = "x,y,w,h (top-left corner and size in pixels)"
+POINTS_SYNTAX = "x1,y1,x2,y2,... (pixels on the object's outline)"
 #: Hint shown when matplotlib is missing.
 PLOT_HINT = "pip install matplotlib"
 
@@ -367,17 +370,6 @@ def write_frame_png(video_path, out_png=None, *, index: int | None = None, time_
 # ROI from what image tools give
 # ----------------------------------------------------------------------------------------------------------
 
-def _parse_numbers(text: str, what: str) -> list[float]:
-    fields = [f.strip() for f in str(text).replace(";", ",").split(",") if f.strip()]
-    try:
-        values = [float(f) for f in fields]
-    except ValueError:
-        raise RoiError(f"{what} '{text}' is not a list of numbers") from None
-    if not all(math.isfinite(v) for v in values):
-        raise RoiError(f"{what} '{text}' contains a non-finite number")
-    return values
-
-
 def _rounded(roi: Ellipse, tolerance: float) -> Ellipse:
     """``roi`` as a circle of equal area when its axes differ by at most ``tolerance`` (relative)."""
     if tolerance > 0 and roi.a - roi.b <= tolerance * roi.a:
@@ -411,12 +403,12 @@ def roi_from_box(box, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
     Raises
     ------
     RoiError
-        Not 4 numbers, or a side <= 0.
+        Not 4 numbers (read as :func:`~logpolar_track.geometry.parse_numbers` reads them: plain decimals, no ``_``,
+        ``nan`` or ``inf``), or a side <= 0.
     """
-    values = _parse_numbers(box, "box") if isinstance(box, str) else [float(v) for v in box]
+    values = parse_numbers(box, "box", BOX_SYNTAX) if isinstance(box, str) else [float(v) for v in box]
     if len(values) != 4:
-        raise RoiError(f"box '{box}' has {counted(len(values), 'number')}; expected x,y,w,h (top-left corner and "
-                       f"size in pixels)")
+        raise RoiError(f"box '{box}' has {counted(len(values), 'number')}; expected {BOX_SYNTAX}")
     x, y, w, h = values
     if w <= 0 or h <= 0:
         raise RoiError(f"box '{box}': width and height must be > 0 pixels")
@@ -463,7 +455,8 @@ def roi_from_points(points, *, round_tolerance: float = ROUND_TOLERANCE) -> Elli
     Raises
     ------
     RoiError
-        An odd count of numbers, an array of another shape, a point not finite, fewer than 3 distinct points, all
+        A text that is not a list of numbers (:func:`~logpolar_track.geometry.parse_numbers`), an odd count of
+        numbers, an array of another shape, a point not finite, fewer than 3 distinct points, all
         points on a line, or no ellipse fits.
 
     Notes
@@ -479,7 +472,7 @@ def roi_from_points(points, *, round_tolerance: float = ROUND_TOLERANCE) -> Elli
     around the whole object.
     """
     if isinstance(points, str):
-        values = _parse_numbers(points, "points")
+        values = parse_numbers(points, "points", POINTS_SYNTAX)
         if len(values) % 2:
             raise RoiError(f"points give {len(values)} numbers; expected pairs x1,y1,x2,y2,... (pixels)")
         given = np.asarray(values, float).reshape(-1, 2)
@@ -522,149 +515,8 @@ def roi_from_points(points, *, round_tolerance: float = ROUND_TOLERANCE) -> Elli
 
 
 # ----------------------------------------------------------------------------------------------------------
-# Run CSVs
+# Run CSVs: read by evaluate.read_run_csv (here too as look.read_run_csv), the one reader eval uses as well
 # ----------------------------------------------------------------------------------------------------------
-
-@dataclass
-class RunTable:
-    """A run CSV as arrays, one entry per row (the contract's columns, :data:`~logpolar_track.results.COLUMNS`).
-
-    Attributes
-    ----------
-    frames : ndarray of int
-    time_s : ndarray
-        Seconds.
-    ellipses : ndarray, shape (n, 5)
-        ``(cx, cy, a, b, angle_deg)`` pixels / degrees CCW on screen.
-    scale, rotation_deg, score : ndarray
-        ``rotation_deg`` is NaN where the tracker does not measure rotation.
-    status : list of str
-    source : str
-        File name, for messages.
-    """
-
-    frames: np.ndarray
-    time_s: np.ndarray
-    ellipses: np.ndarray
-    scale: np.ndarray
-    rotation_deg: np.ndarray
-    score: np.ndarray
-    status: list
-    source: str = "run"
-
-    def __len__(self) -> int:
-        return len(self.frames)
-
-    @property
-    def lost(self) -> np.ndarray:
-        return np.array([s == "lost" for s in self.status], bool)
-
-    def track(self) -> Track:
-        """The same rows as :class:`~logpolar_track.evaluate.Track`, for scoring against ground truth."""
-        return Track(self.frames, self.ellipses, self.scale, self.rotation_deg, self.score, list(self.status))
-
-    def result(self, i: int) -> FrameResult:
-        """Row ``i`` as a :class:`~logpolar_track.results.FrameResult`."""
-        rot = float(self.rotation_deg[i])
-        state = TrackState(Ellipse(*(float(v) for v in self.ellipses[i])), float(self.scale[i]),
-                           rot if math.isfinite(rot) else None, float(self.score[i]))
-        return FrameResult(int(self.frames[i]), float(self.time_s[i]), state, self.status[i])
-
-    @classmethod
-    def from_results(cls, results: Iterable[FrameResult], source: str = "run") -> "RunTable":
-        """A table of :class:`~logpolar_track.results.FrameResult` values (e.g. from ``track_video``)."""
-        results = list(results)
-        if not results:
-            raise UsageError("the run has no rows")
-        ell = np.array([[r.state.ellipse.cx, r.state.ellipse.cy, r.state.ellipse.a, r.state.ellipse.b,
-                         r.state.ellipse.angle_deg] for r in results], float)
-        rot = np.array([math.nan if r.state.rotation_deg is None else r.state.rotation_deg for r in results])
-        return cls(np.array([r.frame for r in results], int), np.array([r.time_s for r in results], float),
-                   ell, np.array([r.state.scale for r in results], float), rot,
-                   np.array([r.state.score for r in results], float), [r.status for r in results], source)
-
-
-def read_run_csv(path, video=None) -> RunTable:
-    """Read a run CSV and check that it follows the contract.
-
-    The header must start with :data:`~logpolar_track.results.COLUMNS` in order (later columns, appended by
-    newer versions, are ignored); every row needs an integer ``frame`` (increasing), numbers in ``time_s``,
-    ``cx``, ``cy``, ``a``, ``b`` (> 0), ``angle_deg``, ``scale`` and ``score`` (0 to 1), a number or nothing in
-    ``rotation_deg``, and a ``status`` among ``init``, ``tracked``, ``lost``.
-
-    A batch's stream (``lptrack run ... --csv -``) leads with a ``video`` column: its rows of one video are
-    taken, the only one, or the one whose ``video`` names the file ``video`` (a path).
-
-    Raises
-    ------
-    GroundTruthError
-        (exit code 1) Unreadable file, or the first place where it departs from the contract: line number,
-        column, value, and what is expected; a batch's stream of several videos, none of them ``video``.
-    """
-    path = Path(path)
-    expected = ",".join(COLUMNS)
-    hint = f"expected an lptrack run CSV with the header {expected}, or its JSON lines"
-    header, body = read_data_file(path, "run CSV", hint)
-    if header[:1] == ["video"]:
-        header, body = _one_video(path, header, body, video)
-    if not header:
-        raise GroundTruthError(f"run CSV '{path}' is empty; {hint}")
-    if tuple(header[:len(COLUMNS)]) != COLUMNS:
-        got = ",".join(header)[:80]
-        raise GroundTruthError(f"run CSV '{path}' has the header '{got}'; {hint}")
-    if not body:
-        raise GroundTruthError(f"run CSV '{path}' has a header but no rows")
-    numeric = ("time_s", "cx", "cy", "a", "b", "angle_deg", "scale", "score")
-    table = {c: [] for c in COLUMNS}
-    for line, row in body:
-        if len(row) < len(COLUMNS):
-            raise GroundTruthError(f"run CSV '{path}' line {line} has {len(row)} fields; expected "
-                                   f"{len(COLUMNS)} ({expected})")
-        fields = dict(zip(COLUMNS, (f.strip() for f in row)))
-
-        def bad(column: str, what: str):
-            return GroundTruthError(f"run CSV '{path}' line {line}: {column} '{fields[column]}' is not "
-                                    f"{what}")
-        try:
-            table["frame"].append(int(fields["frame"]))
-        except ValueError:
-            raise bad("frame", "a frame index (integer >= 0)") from None
-        if table["frame"][-1] < 0 or (len(table["frame"]) > 1 and table["frame"][-1] <= table["frame"][-2]):
-            raise bad("frame", "a frame index >= 0 greater than the previous row's")
-        for column in numeric:
-            try:
-                value = float(fields[column])
-            except ValueError:
-                raise bad(column, "a number") from None
-            if not math.isfinite(value) or (column in ("a", "b") and value <= 0):
-                raise bad(column, "a finite number" + (" > 0" if column in ("a", "b") else ""))
-            table[column].append(value)
-        rot = fields["rotation_deg"]
-        try:
-            table["rotation_deg"].append(float(rot) if rot else math.nan)
-        except ValueError:
-            raise bad("rotation_deg", "a number or empty") from None
-        broken = off_contract(fields["status"], table["score"][-1])
-        if broken is not None:
-            raise bad(*broken)
-        table["status"].append(fields["status"])
-    t = {c: np.asarray(v, float) for c, v in table.items() if c not in ("frame", "status")}
-    return RunTable(np.asarray(table["frame"], int), t["time_s"],
-                    np.column_stack([t["cx"], t["cy"], t["a"], t["b"], t["angle_deg"]]), t["scale"],
-                    t["rotation_deg"], t["score"], table["status"], path.name)
-
-
-def _one_video(path: Path, header: list[str], body: list, video) -> tuple[list[str], list]:
-    """The header and rows of one video of a batch's stream (``video`` its first column), without that column:
-    the only video, or the one whose name is the file ``video``."""
-    names = list(dict.fromkeys(row[0].strip() for _, row in body if row))
-    chosen = names[0] if len(names) == 1 else None
-    if chosen is None and video is not None:
-        chosen = next((name for name in names if same_file(name, video, path)), None)
-    if chosen is None:
-        raise several_videos(path, names, "give", video)
-    return header[1:], [(line, row[1:]) for line, row in body if row and row[0].strip() == chosen]
-
 
 def _as_table(run) -> RunTable:
     if isinstance(run, RunTable):

@@ -347,6 +347,25 @@ def test_roi_file_parsing(tmp_path):
             read_roi_file(tmp_path / "bad.csv")
 
 
+def test_a_roi_files_numbers_are_read_by_the_rule_of_parse_roi(tmp_path):
+    """Whether the last column is a tracker's name was decided by float(), which takes nan, inf and 1_0 (a start
+    frame 'nan' was asked for) and not the typeset minus sign that parse_roi takes (an angle of \u221230 was read
+    as a tracker)."""
+    roi_file = tmp_path / "r.csv"
+    roi_file.write_text("a.mp4,320,240,60,30,\u221230\n")
+    assert read_roi_file(roi_file)[0].roi == Ellipse(320, 240, 60, 30, -30)
+    for last in ("nan", "inf", "1_0"):
+        roi_file.write_text(f"a.mp4,320,240,40,{last}\n")
+        with pytest.raises(UsageError, match=re.escape(f"(the last column, '{last}', is not a number (plain decimals "
+                                                       f"such as 12, -3.5 or 1e3; no '_', nan or inf), so it is read "
+                                                       f"as a tracker's name)")):
+            read_roi_file(roi_file)
+    roi_file.write_text("a.mp4,320,240,4_0\n")
+    with pytest.raises(UsageError, match=re.escape("got 'a.mp4,320,240,4_0' (the last column, '4_0', is not a "
+                                                   "number")):
+        read_roi_file(roi_file)
+
+
 def test_bad_roi_file_is_a_usage_error(work):
     (work / "rois.csv").write_text("footage/day1/a.mp4,80,60\n")
     result = invoke("--roi-file", "rois.csv", "--no-video")

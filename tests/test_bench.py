@@ -23,6 +23,7 @@ from logpolar_track.errors import UsageError
 from logpolar_track.cli import main
 from logpolar_track.datasets import discover
 from logpolar_track.geometry import Ellipse, parse_roi
+from logpolar_track.results import COLUMNS
 from logpolar_track.synthetic import Pose, similarity_path, synthetic_sequence
 from logpolar_track.trackers import base
 from logpolar_track.trackers.base import Tracker, TrackState
@@ -710,7 +711,9 @@ def test_eval_rejects_unreadable_prediction(dataset, tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("frame,cx\n0,1\n")
     res = _run("eval", bad, dataset / "alpha.gt.csv")
-    assert res.exit_code == 1 and res.stderr.startswith("lptrack: error:") and "lacks column" in res.stderr
+    assert res.exit_code == 1 and res.stderr == (f"lptrack: error: run CSV '{bad}' has the header 'frame,cx'; expected "
+                                                 f"an lptrack run CSV with the header {','.join(COLUMNS)}, or its JSON "
+                                                 f"lines\n")
 
 
 def test_bench_outputs_are_checked_before_the_run(dataset, tmp_path):

@@ -293,17 +293,18 @@ def test_read_gt_csv_and_run_csv(tmp_path):
     np.testing.assert_allclose(gt.radius[0], math.sqrt(20 * 10))
     run = tmp_path / "run.csv"
     run.write_text("frame,time_s,cx,cy,a,b,angle_deg,scale,rotation_deg,score,status\n"
-                   "0,0,50,40,20,10,30,1,,1,init\n1,0.04,52,40,22,11,40,1.1,n/a,0.9,tracked\n")
+                   "0,0,50,40,20,10,30,1,,1,init\n1,0.04,52,40,22,11,40,1.1,,0.9,tracked\n")
     track = read_track_csv(run)
     assert track.frames.tolist() == [0, 1] and np.isnan(track.rotation_deg).all()
     m = score_track(gt, track)
     assert m["frames_scored"] == 2 and m["centre_error_median_px"] == pytest.approx(0.5)
     assert m["lost_rate"] == 0.0 and m["off_tracked_rate"] == 0.0
-    # Another tool's file without statuses (no column, or the column empty): how often it was lost is not known.
-    for header, tail in (("frame,cx,cy,a,b,angle_deg", ""), ("frame,cx,cy,a,b,angle_deg,status", ",")):
-        run.write_text(f"{header}\n0,50,40,20,10,30{tail}\n1,90,40,20,10,30{tail}\n")
-        m = score_track(gt, read_track_csv(run))
-        assert math.isnan(m["lost_rate"]) and math.isnan(m["off_tracked_rate"])
+    # A file without the run CSV's columns (statuses, scores) is refused, as plot and sheet refuse it: eval read
+    # it by rules of its own.
+    run.write_text("frame,cx,cy,a,b,angle_deg\n0,50,40,20,10,30\n1,90,40,20,10,30\n")
+    with pytest.raises(GroundTruthError, match="has the header 'frame,cx,cy,a,b,angle_deg'; expected an lptrack run "
+                                               "CSV with the header frame,time_s,"):
+        read_track_csv(run)
     (tmp_path / "bad.csv").write_text("frame,cx\n0,1\n")
     with pytest.raises(GroundTruthError, match="lacks column"):
         read_gt_csv(tmp_path / "bad.csv")

@@ -310,6 +310,26 @@ def test_roi_command_prints_a_spec_checked_against_the_frame(tiny_video):
     assert "0 to 19" in one_error_line(invoke("roi", tiny_video.path, "--at", 40, "--from-box", "60,40,40,40"), 2)
 
 
+@pytest.mark.parametrize("bad", ["1_0", "nan", "inf", "-inf", "1e999"])
+def test_every_list_of_numbers_refuses_what_is_no_plain_number_alike(bad):
+    """parse_roi refused 1_40 and took the typeset minus sign; roi_from_box and roi_from_points did the opposite
+    (a box of width 8_0 gave a circle of radius 40)."""
+    rule = f"'{bad}' is not a number (give plain decimals such as 12, -3.5 or 1e3; no '_', nan or inf)"
+    for read, text in ((parse_roi, f"280,200,{bad}"), (roi_from_box, f"280,200,{bad},80"),
+                       (roi_from_points, f"0,0,{bad},0,10,10")):
+        with pytest.raises(RoiError, match=re.escape(rule)):
+            read(text)
+
+
+def test_every_list_of_numbers_takes_the_typeset_minus_sign(tiny_video):
+    minus = "\u2212"
+    assert parse_roi(f"{minus}280,200,40") == parse_roi("-280,200,40")
+    assert roi_from_box(f"{minus}280,200,80,80") == roi_from_box("-280,200,80,80") == Ellipse.circle(-240, 240, 40)
+    assert roi_from_points(f"{minus}10,0,10,0,0,10") == roi_from_points("-10,0,10,0,0,10")
+    result = invoke("roi", tiny_video.path, "--from-box", "60,40,4_0,40")
+    assert "'4_0' is not a number" in one_error_line(result, 2) and result.stdout == ""
+
+
 # -- a tiny run for plot and sheet ----------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
@@ -380,7 +400,7 @@ def test_read_run_csv_follows_the_contract(tiny_run, tmp_path):
     assert table.result(3).state.ellipse.cx == table.ellipses[3, 0]
     messages = {}
     for name, path in bad_csvs(tmp_path, run_csv).items():
-        with pytest.raises(Exception) as info:
+        with pytest.raises(GroundTruthError) as info:
             read_run_csv(path)
         messages[name] = str(info.value)
     assert ",".join(COLUMNS) in messages["header"]
@@ -391,14 +411,49 @@ def test_read_run_csv_follows_the_contract(tiny_run, tmp_path):
 
 
 def test_eval_refuses_a_status_or_score_off_contract_as_plot_and_sheet_do(tiny_run, tmp_path):
-    """``eval`` reads predictions of other tools too (only frame and the ellipse are required), but a status or
-    a score the contract does not allow is a file gone wrong: it scored a status 'found' and a score 1.5."""
+    """A status or a score the contract does not allow is a file gone wrong: eval scored a status 'found' and a
+    score 1.5."""
     _, run_csv, _ = tiny_run
     cases = bad_csvs(tmp_path, run_csv)
     with pytest.raises(GroundTruthError, match="line 3: status 'found' is not one of init, tracked, lost"):
         read_track_csv(cases["status"])
     with pytest.raises(GroundTruthError, match=r"line 5: score '1.5' is not in \[0, 1\]"):
         read_track_csv(cases["score"])
+
+
+def _with_field(good: Path, folder: Path, line: int, column: str, value: str) -> Path:
+    """A copy of the run CSV ``good`` whose ``column`` on file line ``line`` (1: the header) holds ``value``."""
+    lines = good.read_text().splitlines()
+    fields = lines[line - 1].split(",")
+    fields[COLUMNS.index(column)] = value
+    lines[line - 1] = ",".join(fields)
+    path = folder / f"run_{column}.csv"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("line, column, value, said", [
+    (4, "cx", "nan", "line 4: cx 'nan' is not a number"),
+    (4, "a", "-5", "line 4: a '-5' is not a number > 0"),
+    (3, "frame", "1.0", "line 3: frame '1.0' is not a frame index (integer >= 0)"),
+    (4, "status", "", "line 4: status '' is not one of init, tracked, lost"),
+], ids=["cx-nan", "a-negative", "frame-float", "status-empty"])
+def test_eval_plot_and_sheet_refuse_a_run_csv_off_contract_alike(tiny_run, tmp_path, line, column, value, said):
+    """One reader of a run CSV: eval had rules of its own and scored (exit 0) a file with a centre 'nan', a semi-axis
+    -5, a frame '1.0' or an empty status, which plot and sheet refused."""
+    video, run_csv, gt = tiny_run
+    path = _with_field(run_csv, tmp_path, line, column, value)
+    commands = {"eval": ("eval", path, gt), "sheet": ("sheet", video.path, path, "-o", tmp_path / "s.png")}
+    if _has_matplotlib():  # plot says first that it needs it
+        commands["plot"] = ("plot", path, "--no-video", "-o", tmp_path / "p.png")
+    for name, args in commands.items():
+        result = invoke(*args)
+        expected = (1, "", f"lptrack: error: run CSV '{path}' {said}\n")
+        assert (result.exit_code, result.stdout, result.stderr) == expected, name
+    for read in (read_run_csv, read_track_csv):
+        with pytest.raises(GroundTruthError, match=re.escape(said)):
+            read(path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [path.name]
 
 
 def test_eval_refuses_its_two_files_the_wrong_way_round(tiny_run):
@@ -421,7 +476,7 @@ def test_eval_refuses_a_batch_stream_of_several_videos(tiny_run, tmp_path):
     _, run_csv, _ = tiny_run
     header, *rows = run_csv.read_text().splitlines()
     stream = tmp_path / "two.csv"
-    stream.write_text("\n".join([header + ",video"] + [r + ",a.mp4" for r in rows] + [r + ",b.mp4" for r in rows])
+    stream.write_text("\n".join(["video," + header] + ["a.mp4," + r for r in rows] + ["b.mp4," + r for r in rows])
                       + "\n")
     with pytest.raises(GroundTruthError, match=r"holds the rows of 2 videos \(a.mp4, b.mp4: its 'video' column\)"):
         read_track_csv(stream)
@@ -473,9 +528,9 @@ def test_eval_scores_one_video_of_a_batch_stream(tiny_run, tmp_path, monkeypatch
     refused = invoke("eval", "all.csv", "tiny.gt.csv")
     assert refused.exit_code == 1 and refused.stderr == (
         "lptrack: error: run CSV 'all.csv' holds the rows of 2 videos (tiny.mp4, copy.mp4: its 'video' column); "
-        "choose one with --video VIDEO, or score one video's run (its own CSV, as --out-dir writes them)\n")
+        "choose one with --video VIDEO, or give one video's run (its own CSV, as --out-dir writes them)\n")
     elsewhere = invoke("eval", "all.csv", "tiny.gt.csv", "--video", "other.mp4")
-    assert elsewhere.exit_code == 1 and "none of them is 'other.mp4'; score one video's run" in elsewhere.stderr
+    assert elsewhere.exit_code == 1 and "none of them is 'other.mp4'; give one video's run" in elsewhere.stderr
 
 
 def test_eval_plot_and_sheet_read_the_run_from_stdin_as_dash(tiny_run, tmp_path, monkeypatch):

@@ -337,8 +337,8 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, vid
     matched by index (line k of a .txt file is frame k-1); the metrics are
     those of 'lptrack bench' (see 'lptrack bench --help'). A .gt.csv
     without a rotation_deg column has its rotation scored modulo 180
-    degrees (an ellipse's angle repeats every half turn). A CSV without a
-    status column has no lost% or off_tracked% (n/a).
+    degrees (an ellipse's angle repeats every half turn). PRED.csv is
+    checked against the run CSV's contract as 'lptrack plot' checks it.
     """
     from ..datasets import load_ground_truth
     from ..evaluate import read_track_csv, score_track

@@ -759,9 +759,13 @@ def _one_video(path: Path, header: list[str], body: list, video) -> tuple[list[s
 #: The columns of a run CSV that hold a number in every row, and the columns among them that must be > 0.
 _NUMBER_COLUMNS = ("time_s", "cx", "cy", "a", "b", "angle_deg", "scale", "score")
 _POSITIVE_COLUMNS = ("a", "b")
+#: The columns another tool's CSV needs for ``lptrack eval`` (see :func:`read_run_csv`), and what a missing one of
+#: the others reads as: NaN for a time or rotation, 1 for a scale or score.
+OTHER_TOOLS_COLUMNS = ("frame", "cx", "cy", "a", "b", "angle_deg")
+_OTHER_TOOLS_DEFAULTS = {"time_s": "", "scale": "1", "rotation_deg": "", "score": "1"}
 
 
-def read_run_csv(path, video=None) -> RunTable:
+def read_run_csv(path, video=None, *, other_tools: bool = False) -> RunTable:
     """Read a run CSV (or its JSON lines, as ``lptrack run`` writes them) and check that it follows the contract:
     the one reader of a run's file, for ``plot``, ``sheet`` and ``eval`` alike.
 
@@ -770,6 +774,11 @@ def read_run_csv(path, video=None) -> RunTable:
     finite number in ``time_s``, ``cx``, ``cy``, ``a``, ``b`` (> 0), ``angle_deg``, ``scale`` and ``score`` (0 to
     1), a finite number or nothing in ``rotation_deg``, and a ``status`` among ``init``, ``tracked``, ``lost``.
     Numbers are read as :func:`~logpolar_track.geometry.parse_number` reads them (no ``nan``, ``inf`` or ``_``).
+
+    With ``other_tools`` (what ``lptrack eval`` scores), a CSV whose header is not a run's but names at least
+    :data:`OTHER_TOOLS_COLUMNS`, in any order, is read too, as another tool's track: the columns it has are checked
+    as above, ``time_s`` and ``rotation_deg`` it lacks are NaN, ``scale`` and ``score`` 1, and without a ``status``
+    column the table's ``status`` is empty (how often the track was lost is not known).
 
     A batch's stream (``lptrack run a.mp4 b.mp4 --csv -``) leads with a ``video`` column: its rows of one video are
     taken, the only one, or the one whose ``video`` names the file ``video`` (a path; see :func:`same_file`).
@@ -784,22 +793,30 @@ def read_run_csv(path, video=None) -> RunTable:
     path = Path(path)
     expected = ",".join(COLUMNS)
     hint = f"expected an lptrack run CSV with the header {expected}, or its JSON lines"
+    if other_tools:
+        hint += f" (or another tool's CSV with at least the columns {','.join(OTHER_TOOLS_COLUMNS)})"
     header, body = read_data_file(path, "run CSV", hint)
     if header[:1] == [VIDEO_COLUMN]:
         header, body = _one_video(path, header, body, video)
     if not header:
         raise GroundTruthError(f"run CSV '{path}' is empty; {hint}")
-    if tuple(header[:len(COLUMNS)]) != COLUMNS:
+    if tuple(header[:len(COLUMNS)]) == COLUMNS:
+        place = {column: k for k, column in enumerate(COLUMNS)}
+    elif other_tools and set(OTHER_TOOLS_COLUMNS) <= set(header):
+        place = {column: header.index(column) for column in COLUMNS if column in header}
+    else:
         got = ",".join(header)[:80]
         raise GroundTruthError(f"run CSV '{path}' has the header '{got}'; {hint}")
     if not body:
         raise GroundTruthError(f"run CSV '{path}' has a header but no rows")
+    needed = max(place.values()) + 1
     table: dict[str, list] = {c: [] for c in COLUMNS}
     for line, row in body:
-        if len(row) < len(COLUMNS):  # a row cut short (a file copied while it was written, or cut with head -c)
+        if len(row) < needed:  # a row cut short (a file copied while it was written, or cut with head -c)
             raise GroundTruthError(f"run CSV '{path}' line {line} has {len(row)} fields; expected "
-                                   f"{len(COLUMNS)} ({expected})")
-        fields = dict(zip(COLUMNS, (f.strip() for f in row)))
+                                   f"{len(header)} ({','.join(header)})")
+        fields = {c: row[k].strip() for c, k in place.items()}
+        fields = {**_OTHER_TOOLS_DEFAULTS, **fields}
 
         def bad(column: str, what: str) -> GroundTruthError:
             return GroundTruthError(f"run CSV '{path}' line {line}: {column} '{fields[column]}' is not {what}")
@@ -812,6 +829,9 @@ def read_run_csv(path, video=None) -> RunTable:
                                    f"{table['frame'][-1]}; a run's frames increase")
         table["frame"].append(frame)
         for column in _NUMBER_COLUMNS:
+            if column == "time_s" and "time_s" not in place:
+                table[column].append(math.nan)
+                continue
             value = parse_number(fields[column])
             if value is None:
                 raise bad(column, "a number" + (" > 0" if column in _POSITIVE_COLUMNS else ""))
@@ -823,10 +843,13 @@ def read_run_csv(path, video=None) -> RunTable:
         if value is None:
             raise bad("rotation_deg", "a number or empty (a tracker that does not measure rotation)")
         table["rotation_deg"].append(value)
-        broken = off_contract(fields["status"], table["score"][-1])
-        if broken is not None:
-            raise bad(*broken)
-        table["status"].append(fields["status"])
+        if "status" in place:
+            broken = off_contract(fields["status"], table["score"][-1])
+            if broken is not None:
+                raise bad(*broken)
+            table["status"].append(fields["status"])
+        elif not 0.0 <= table["score"][-1] <= 1.0:
+            raise bad("score", "in [0, 1]")
     t = {c: np.asarray(v, float) for c, v in table.items() if c not in ("frame", "status")}
     return RunTable(np.asarray(table["frame"], int), t["time_s"],
                     np.column_stack([t["cx"], t["cy"], t["a"], t["b"], t["angle_deg"]]), t["scale"],
@@ -834,9 +857,9 @@ def read_run_csv(path, video=None) -> RunTable:
 
 
 def read_track_csv(path, video=None) -> Track:
-    """A run CSV read by :func:`read_run_csv` (the same checks, the same messages), as the :class:`Track` that
-    :func:`score_track` scores: ``read_run_csv(path, video).track()``."""
-    return read_run_csv(path, video).track()
+    """A run CSV read by :func:`read_run_csv` (the same checks, the same messages), or another tool's CSV
+    (``other_tools``), as the :class:`Track` that :func:`score_track` scores: what ``lptrack eval`` reads."""
+    return read_run_csv(path, video, other_tools=True).track()
 
 
 # ----------------------------------------------------------------------------------------------------------

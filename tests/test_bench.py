@@ -713,7 +713,8 @@ def test_eval_rejects_unreadable_prediction(dataset, tmp_path):
     res = _run("eval", bad, dataset / "alpha.gt.csv")
     assert res.exit_code == 1 and res.stderr == (f"lptrack: error: run CSV '{bad}' has the header 'frame,cx'; expected "
                                                  f"an lptrack run CSV with the header {','.join(COLUMNS)}, or its JSON "
-                                                 f"lines\n")
+                                                 f"lines (or another tool's CSV with at least the columns "
+                                                 f"frame,cx,cy,a,b,angle_deg)\n")
 
 
 def test_bench_outputs_are_checked_before_the_run(dataset, tmp_path):

@@ -11,9 +11,9 @@ import pytest
 from logpolar_track.errors import UsageError
 from logpolar_track.evaluate import (GroundTruth, GroundTruthError, Track, auc, box_iou, ground_truth_from_boxes,
                                      ground_truth_from_ellipses, precision_curve, read_box_text, read_gt_csv,
-                                     read_track_csv, rect_from_polygon, rotated_box_corners, rotated_box_iou,
-                                     rotation_errors, scale_errors, score_track, success_curve, success_rate,
-                                     unwrap_rects)
+                                     read_run_csv, read_track_csv, rect_from_polygon, rotated_box_corners,
+                                     rotated_box_iou, rotation_errors, scale_errors, score_track, success_curve,
+                                     success_rate, unwrap_rects)
 
 
 # ---------------------------------------------------------------------------------------------- IoU
@@ -299,11 +299,23 @@ def test_read_gt_csv_and_run_csv(tmp_path):
     m = score_track(gt, track)
     assert m["frames_scored"] == 2 and m["centre_error_median_px"] == pytest.approx(0.5)
     assert m["lost_rate"] == 0.0 and m["off_tracked_rate"] == 0.0
-    # A file without the run CSV's columns (statuses, scores) is refused, as plot and sheet refuse it: eval read
-    # it by rules of its own.
-    run.write_text("frame,cx,cy,a,b,angle_deg\n0,50,40,20,10,30\n1,90,40,20,10,30\n")
-    with pytest.raises(GroundTruthError, match="has the header 'frame,cx,cy,a,b,angle_deg'; expected an lptrack run "
-                                               "CSV with the header frame,time_s,"):
+    # Another tool's file, its columns in any order, without statuses: scored, how often it was lost not known;
+    # plot and sheet, which draw statuses and times, refuse it.
+    run.write_text("angle_deg,frame,cx,cy,a,b\n30,0,50,40,20,10\n30,1,90,40,20,10\n")
+    m = score_track(gt, read_track_csv(run))
+    assert m["frames_scored"] == 2 and math.isnan(m["lost_rate"]) and math.isnan(m["off_tracked_rate"])
+    assert read_track_csv(run).scale.tolist() == [1.0, 1.0]
+    with pytest.raises(GroundTruthError, match="has the header 'angle_deg,frame,cx,cy,a,b'; expected an lptrack run "
+                                               "CSV with the header frame,time_s,.*JSON lines$"):
+        read_run_csv(run)
+    # Its values are checked as a run's are.
+    for body, said in (("30,0,50,nan,20,10", "cy 'nan' is not a number"), ("30,0,50,40,-2,10", "a '-2' is not a "
+                       "number > 0"), ("30,0.0,50,40,20,10", "frame '0.0' is not a frame index")):
+        run.write_text(f"angle_deg,frame,cx,cy,a,b\n{body}\n")
+        with pytest.raises(GroundTruthError, match=f"line 2: {said}"):
+            read_track_csv(run)
+    run.write_text("frame,cx,cy,a,b,angle_deg,status\n0,50,40,20,10,30,\n")
+    with pytest.raises(GroundTruthError, match="line 2: status '' is not one of init, tracked, lost"):
         read_track_csv(run)
     (tmp_path / "bad.csv").write_text("frame,cx\n0,1\n")
     with pytest.raises(GroundTruthError, match="lacks column"):

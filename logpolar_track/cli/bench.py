@@ -338,7 +338,10 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, vid
     those of 'lptrack bench' (see 'lptrack bench --help'). A .gt.csv
     without a rotation_deg column has its rotation scored modulo 180
     degrees (an ellipse's angle repeats every half turn). PRED.csv is
-    checked against the run CSV's contract as 'lptrack plot' checks it.
+    checked against the run CSV's contract as 'lptrack plot' checks it; a
+    CSV of another tool with at least the columns frame,cx,cy,a,b,angle_deg
+    (any order) is scored too, its values checked alike, and without a
+    status column it has no lost% or off_tracked% (n/a).
     """
     from ..datasets import load_ground_truth
     from ..evaluate import read_track_csv, score_track

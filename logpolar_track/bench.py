@@ -26,10 +26,10 @@ from typing import Callable, Iterable, Mapping
 import numpy as np
 
 from . import __version__
-from .datasets import SEARCH_DEPTH, Sequence, discover, discover_one
+from .datasets import SEARCH_DEPTH, Sequence, discover, discover_one, load_ground_truth
 from .errors import OutputError, RoiError, UsageError, is_whole
 from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
-                       auc, score_track, success_curve)
+                       auc, read_track_csv, score_track, success_curve)
 from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_threads, run_tasks
 from .geometry import Ellipse
 from .look import PLOT_SUFFIXES, check_image_suffix, matplotlib_hint
@@ -729,6 +729,73 @@ def plot_curves(summary: list[dict], path, caption: str | None = None, *, overwr
         plt.close(fig)
 
 
+def evaluate_run(prediction, ground_truth, *, video=None) -> tuple[dict, list[str]]:
+    """Score a run's CSV (or another tool's: :func:`~logpolar_track.evaluate.read_track_csv`) against ground truth,
+    as ``lptrack eval`` does: the metrics of :func:`~logpolar_track.evaluate.score_track` and notes on what was not
+    scored (frames with ground truth but no row, rows past the ground truth's end), one sentence each.
+
+    Parameters
+    ----------
+    prediction : str or Path
+        The run's CSV or JSON lines; ``'-'`` reads stdin.
+    ground_truth : str or Path
+        Any ground truth :func:`~logpolar_track.datasets.load_ground_truth` reads (a ``.gt.csv``, OTB, VOT or
+        UAV123 file, a sequence folder, or a video with its ``.gt.csv`` beside it). Frames are matched by index.
+    video : str or Path, optional
+        With a batch's stream (a ``video`` column): the video whose rows are scored.
+
+    Raises
+    ------
+    UsageError
+        The two given the other way round (a ``.gt.csv`` as the run, a run as the ground truth), or no row of the
+        run has ground truth.
+    GroundTruthError, InputError
+        A file that cannot be read as what it is given as.
+    """
+    prediction, ground_truth = Path(prediction), Path(ground_truth)
+    _check_argument_order(prediction, ground_truth)
+    track = read_track_csv(prediction, video)
+    gt = load_ground_truth(ground_truth)
+    metrics = score_track(gt, track)
+    if metrics["frames_scored"] == 0:
+        raise UsageError(f"no frame of '{prediction}' has ground truth in '{ground_truth}' (frames are matched "
+                         "by index, 0 = first frame)")
+    notes = []
+    if metrics["frames_missing"]:
+        total = metrics["frames_scored"] + metrics["frames_missing"]
+        notes.append(f"'{prediction}' has no row for {metrics['frames_missing']} of the {total} frames with ground "
+                     f"truth; they are not scored")
+    # The other way round too: a ground truth cut short, or another sequence's, scored part of the run in silence.
+    beyond = int((track.frames >= len(gt)).sum())
+    if beyond:
+        notes.append(f"{beyond} of the {len(track.frames)} rows of '{prediction}' {'lies' if beyond == 1 else 'lie'} "
+                     f"past the end of '{ground_truth}' ({len(gt)} frames); they are not scored (is it this video's "
+                     f"ground truth?)")
+    return metrics, notes
+
+
+def _check_argument_order(prediction: Path, ground_truth: Path) -> None:
+    """Refuse a ground-truth file given as the run, or a run CSV given as the ground truth: both are CSVs of frames
+    and ellipses, and eval scored them the other way round without a word (a .gt.csv against itself: AUC 0.952)."""
+    usage = "the run's CSV goes first: lptrack eval PRED.csv GT"
+    if prediction.name.lower().endswith(".gt.csv"):
+        raise UsageError(f"PRED.csv '{prediction}' is ground truth (a .gt.csv), not a run; {usage}")
+    if ground_truth.suffix.lower() in (".csv", ".jsonl") and ground_truth.is_file():
+        columns = _first_line(ground_truth).replace('"', "").split(",")
+        if ground_truth.suffix.lower() == ".jsonl" or {"time_s", "status"} <= {c.strip() for c in columns}:
+            raise UsageError(f"GT '{ground_truth}' is an lptrack run (its columns include time_s and status), not "
+                             f"ground truth; {usage}")
+
+
+def _first_line(path: Path) -> str:
+    """The first line of a text file, or '' if it cannot be read as text (its reader then says what is wrong)."""
+    try:
+        with open(path, encoding="utf-8-sig", errors="strict") as fh:
+            return fh.readline(65536).strip()
+    except (OSError, UnicodeDecodeError):
+        return ""
+
+
 def eval_document(pred_path, gt_path, metrics: dict, *, per_frame: bool = True, video=None) -> dict:
     """JSON-ready document of ``lptrack eval``: inputs, metric constants and every metric; with ``video``, the video
     whose rows of a batch's stream were scored (``"video"``)."""
@@ -741,5 +808,5 @@ def eval_document(pred_path, gt_path, metrics: dict, *, per_frame: bool = True, 
 
 __all__ = ["run_one", "run_bench", "mean_over_starts", "start_roi", "STARTS", "summarise", "format_table",
            "paired_differences", "format_paired", "auc_per_pass", "format_passes",
-           "bench_document", "eval_document", "plot_curves", "resolve_trackers", "collect_sequences",
+           "bench_document", "eval_document", "evaluate_run", "plot_curves", "resolve_trackers", "collect_sequences",
            "default_dataset", "write_text_atomic", "environment", "SCHEMA_VERSION"]

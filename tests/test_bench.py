@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from logpolar_track.bench import format_paired, mean_over_starts, paired_differences, run_bench, run_one, start_roi
+from logpolar_track.bench import (evaluate_run, format_paired, mean_over_starts, paired_differences, run_bench, run_one,
+                                  start_roi)
 from logpolar_track.errors import UsageError
 from logpolar_track.cli import main
 from logpolar_track.datasets import discover
@@ -694,6 +695,17 @@ def test_eval_scores_a_run_csv(dataset, tmp_path):
     _write_run_csv(pred, truth)
     res = _run("eval", pred, dataset / "alpha.gt.csv")
     assert res.exit_code == 0 and res.stdout.splitlines()[2].split()[3] == "100.0"
+
+
+def test_evaluate_run_is_what_eval_does_from_python(dataset, tmp_path):
+    truth = _TRUTH[(dataset / "alpha.roi").read_text().strip()]
+    pred = tmp_path / "alpha.csv"
+    _write_run_csv(pred, truth[:-2], shift=5.0)  # two frames short of the ground truth
+    metrics, notes = evaluate_run(pred, dataset / "alpha.gt.csv")
+    assert metrics["frames_scored"] == N_FRAMES - 2 and metrics["centre_error_median_px"] == pytest.approx(5.0, abs=1e-3)
+    assert notes == [f"'{pred}' has no row for 2 of the {N_FRAMES} frames with ground truth; they are not scored"]
+    with pytest.raises(UsageError, match="is ground truth \\(a .gt.csv\\), not a run; the run's CSV goes first"):
+        evaluate_run(dataset / "alpha.gt.csv", pred)
 
 
 def test_eval_to_a_stdout_that_cannot_encode_its_table_is_one_error_line(dataset, tmp_path):

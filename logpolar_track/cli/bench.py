@@ -8,7 +8,8 @@ from pathlib import Path
 
 import click
 
-from ..bench import (STARTS, bench_document, collect_sequences, default_dataset, eval_document, format_paired,
+from ..bench import (STARTS, bench_document, collect_sequences, default_dataset, eval_document, evaluate_run,
+                     format_paired,
                      format_passes, format_table, paired_differences, plot_curves, resolve_trackers,
                      run_bench, summarise, write_text_atomic)
 from ..errors import UsageError
@@ -284,28 +285,6 @@ def _note_skipped(skipped: list[tuple[str, str]], quiet: bool) -> None:
             click.echo(f"lptrack: note: skipping {name}: {reason}", err=True)
 
 
-def _check_argument_order(prediction: Path, ground_truth: Path) -> None:
-    """Refuse a ground-truth file given as the run, or a run CSV given as the ground truth: both are CSVs of frames
-    and ellipses, and eval scored them the other way round without a word (a .gt.csv against itself: AUC 0.952)."""
-    usage = "the run's CSV goes first: lptrack eval PRED.csv GT"
-    if prediction.name.lower().endswith(".gt.csv"):
-        raise UsageError(f"PRED.csv '{prediction}' is ground truth (a .gt.csv), not a run; {usage}")
-    if ground_truth.suffix.lower() in (".csv", ".jsonl") and ground_truth.is_file():
-        columns = _first_line(ground_truth).replace('"', "").split(",")
-        if ground_truth.suffix.lower() == ".jsonl" or {"time_s", "status"} <= {c.strip() for c in columns}:
-            raise UsageError(f"GT '{ground_truth}' is an lptrack run (its columns include time_s and status), not "
-                             f"ground truth; {usage}")
-
-
-def _first_line(path: Path) -> str:
-    """The first line of a text file, or '' if it cannot be read as text (its reader then says what is wrong)."""
-    try:
-        with open(path, encoding="utf-8-sig", errors="strict") as fh:
-            return fh.readline(65536).strip()
-    except (OSError, UnicodeDecodeError):
-        return ""
-
-
 def _emit(table: str, doc: dict | None, json_out: str | None, overwrite: bool) -> None:
     """The table on stdout and the JSON document to ``json_out``; with ``--json -`` the table goes to stderr."""
     if json_out is not None:
@@ -343,31 +322,13 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, vid
     (any order) is scored too, its values checked alike, and without a
     status column it has no lost% or off_tracked% (n/a).
     """
-    from ..datasets import load_ground_truth
-    from ..evaluate import read_track_csv, score_track
     from ..video import VIDEO_EXTENSIONS
     _check_json_out(json_out, overwrite)
-    _check_argument_order(prediction, ground_truth)
-
     if video is None and ground_truth.suffix.lower() in VIDEO_EXTENSIONS:
         video = ground_truth  # its rows, if PRED.csv is a batch's stream
-    track = read_track_csv(prediction, video)
-    gt = load_ground_truth(ground_truth)
-    metrics = score_track(gt, track)
-    if metrics["frames_scored"] == 0:
-        raise UsageError(f"no frame of '{prediction}' has ground truth in '{ground_truth}' (frames are matched "
-                         "by index, 0 = first frame)")
-    if metrics["frames_missing"]:
-        total = metrics["frames_scored"] + metrics["frames_missing"]
-        click.echo(f"lptrack: note: '{prediction}' has no row for {metrics['frames_missing']} of the {total} frames "
-                   f"with ground truth; they are not scored", err=True)
-    # The other way round too: a ground truth cut short, or another sequence's, scored part of the run in silence.
-    beyond = int((track.frames >= len(gt)).sum())
-    if beyond:
-        click.echo(f"lptrack: note: {beyond} of the {len(track.frames)} rows of '{prediction}' "
-                   f"{'lies' if beyond == 1 else 'lie'} past the end of "
-                   f"'{ground_truth}' ({len(gt)} frames); they are not scored (is it this video's ground truth?)",
-                   err=True)
+    metrics, notes = evaluate_run(prediction, ground_truth, video=video)
+    for note in notes:
+        click.echo(f"lptrack: note: {note}", err=True)
     row = {"sequence": prediction.name, "tracker": "(csv)", **metrics}
     table = format_table([row], [], speed=False)
     if json_out is None:

@@ -702,7 +702,8 @@ def test_evaluate_run_is_what_eval_does_from_python(dataset, tmp_path):
     pred = tmp_path / "alpha.csv"
     _write_run_csv(pred, truth[:-2], shift=5.0)  # two frames short of the ground truth
     metrics, notes = evaluate_run(pred, dataset / "alpha.gt.csv")
-    assert metrics["frames_scored"] == N_FRAMES - 2 and metrics["centre_error_median_px"] == pytest.approx(5.0, abs=1e-3)
+    assert metrics["frames_scored"] == N_FRAMES - 2
+    assert metrics["centre_error_median_px"] == pytest.approx(5.0, abs=1e-3)
     assert notes == [f"'{pred}' has no row for 2 of the {N_FRAMES} frames with ground truth; they are not scored"]
     with pytest.raises(UsageError, match="is ground truth \\(a .gt.csv\\), not a run; the run's CSV goes first"):
         evaluate_run(dataset / "alpha.gt.csv", pred)

@@ -11,8 +11,8 @@ import math
 import cv2
 import numpy as np
 
-from .logpolar import to_bgr
-from .trackers.base import TrackState, check_frame
+from .images import check_frame, to_bgr
+from .trackers.base import TrackState
 
 #: BGR colours: green while tracked (and at init), red when lost.
 TRACKED_COLOUR = (0, 220, 0)

@@ -146,47 +146,6 @@ def rfft2_float32(images: np.ndarray) -> np.ndarray:
     return out
 
 
-def to_gray(frame: np.ndarray, dtype=np.float32) -> np.ndarray:
-    """A grey (``(H, W)`` or ``(H, W, 1)``), BGR or BGRA frame (uint8, or float32 from 0 to 255) as a grey image
-    (0 to 255) of ``dtype``; the input is not modified. A float frame's values are first taken within 0 to 255,
-    channel by channel (:func:`within_0_255`).
-
-    ``dtype=np.uint8`` keeps OpenCV's grey conversion as it is (a quarter of the memory of float32, which
-    matters at 4K). A crop (a strided view) is copied first: converting strided rows of a frame that is not in
-    cache is 1.5x slower than copying them and converting the copy.
-    """
-    if frame.ndim == 3 and frame.shape[2] == 1:
-        frame = frame[:, :, 0]
-    given = frame
-    if frame.dtype != np.uint8:
-        frame = within_0_255(frame)
-    if frame.ndim == 3:
-        code = cv2.COLOR_BGRA2GRAY if frame.shape[2] == 4 else cv2.COLOR_BGR2GRAY
-        return cv2.cvtColor(np.ascontiguousarray(frame), code).astype(dtype, copy=False)
-    return frame.astype(dtype, copy=frame is given)
-
-
-def to_bgr(frame: np.ndarray) -> np.ndarray:
-    """A grey, BGR or BGRA frame (uint8, or float32 from 0 to 255) as a 3-channel uint8 BGR image: grey expanded,
-    alpha dropped, a float frame's values rounded within 0 to 255. The frame itself if it is one already; otherwise
-    a new array (the input is not modified)."""
-    if frame.dtype != np.uint8:
-        frame = np.rint(within_0_255(frame)).astype(np.uint8)
-    if frame.ndim == 3 and frame.shape[2] == 1:
-        frame = frame[:, :, 0]
-    if frame.ndim == 2:
-        return cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
-    if frame.shape[2] == 4:
-        return cv2.cvtColor(frame, cv2.COLOR_BGRA2BGR)
-    return frame
-
-
-def within_0_255(frame: np.ndarray) -> np.ndarray:
-    """A float frame (any channels) with every value in 0 to 255: beyond it clipped, NaN 0, infinities 0 or 255
-    (a computation gone wrong upstream; NaN reached lpcf's features as a garbage bin index). A new array."""
-    return np.clip(np.nan_to_num(frame, nan=0.0, posinf=255.0, neginf=0.0), 0.0, 255.0)
-
-
 class PhaseCorrelator:
     """Batched FFT phase correlation of log-polar images of one shape.
 

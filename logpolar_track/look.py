@@ -41,9 +41,9 @@ from .draw import LOST_COLOUR, TRACKED_COLOUR, draw_state
 from .errors import FrameRangeError, OutputError, RoiError, UsageError, VideoError, counted, is_real
 from .evaluate import RunTable, read_run_csv, rotation_errors, scale_errors, score_track
 from .geometry import Ellipse, as_ellipse, check_roi_fits, ellipse_in_box, parse_numbers
-from .logpolar import to_bgr
+from .images import check_frame, to_bgr
 from .results import FrameResult
-from .trackers.base import TrackState, check_frame
+from .trackers.base import TrackState
 from .outputs import check_output_path, written_into_place
 from .video import VIDEO_EXTENSIONS, VideoReader, check_frame_number, guess_image_sequence, video_stem
 

@@ -22,7 +22,7 @@ from .draw import draw_state
 from .errors import LptrackError, OutputError, RoiError, UsageError
 from .executor import TRACKING_OPENCV_THREADS, opencv_threads
 from .geometry import ROI_SYNTAX, Ellipse, as_ellipse, check_roi_fits, parse_roi
-from .logpolar import within_0_255
+from .images import within_0_255
 from .results import CsvWriter, FrameResult
 from .trackers import DEFAULT_TRACKER, Tracker, create_tracker
 from .outputs import check_output_path, writes_in_place

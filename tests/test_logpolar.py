@@ -11,7 +11,8 @@ import cv2
 import numpy as np
 import pytest
 
-from logpolar_track.logpolar import LogPolarGrid, PhaseCorrelator, find_peaks, parabola_peak_2d, to_gray
+from logpolar_track.images import to_gray
+from logpolar_track.logpolar import LogPolarGrid, PhaseCorrelator, find_peaks, parabola_peak_2d
 from logpolar_track.synthetic import random_texture
 
 CENTRE = (100.0, 100.0)

@@ -14,7 +14,7 @@ import pytest
 
 from logpolar_track.errors import LptrackError, NotStartedError, RoiError, UsageError
 from logpolar_track.geometry import Ellipse
-from logpolar_track.logpolar import to_gray
+from logpolar_track.images import to_gray
 from logpolar_track.synthetic import Pose, random_texture, render_frame, similarity_path, synthetic_sequence
 from logpolar_track.trackers import (create_tracker, tracker_class, tracker_names, tracker_parameters,
                                     tracker_params_from_text)

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import LptrackError, NotStartedError, UsageError, is_real, is_whole
 from ..geometry import Ellipse, as_ellipse, check_roi_fits, wrap_degrees
-from ..logpolar import to_gray
+from ..images import check_frame, frame_layout, to_gray
 
 
 @dataclass(frozen=True)
@@ -97,7 +97,7 @@ class Tracker(ABC):
         """Start tracking the object inside ``roi`` on ``frame``; returns the initial state (score 1).
 
         ``frame`` is an image as OpenCV reads it: ``(H, W, 3)`` BGR (or BGRA, or grey), uint8, or float32 from 0 to
-        255 (see :func:`check_frame`); every later frame must be laid out alike.
+        255 (see :func:`~logpolar_track.images.check_frame`); every later frame must be laid out alike.
 
         ``roi`` is an :class:`~logpolar_track.geometry.Ellipse`, or a ``--roi`` string or its 3 or 5 numbers
         (:func:`~logpolar_track.geometry.as_ellipse`): pixels, degrees counter-clockwise on screen."""
@@ -208,54 +208,9 @@ class SimilarityTracker(Tracker):
         return False
 
 
-_CHANNEL_NAMES = {1: "grey", 3: "BGR", 4: "BGRA"}
-
-
-def frame_layout(frame: np.ndarray) -> tuple[int, np.dtype]:
-    """``(channels, dtype)`` of an image: 1 for ``(H, W)`` and ``(H, W, 1)`` grey, 3 for BGR, 4 for BGRA."""
-    return (frame.shape[2] if frame.ndim == 3 else 1), frame.dtype
-
-
-def check_frame(frame: np.ndarray, size: tuple[int, int] | None = None,
-                layout: tuple[int, np.dtype] | None = None) -> None:
-    """Raise :class:`UsageError` unless ``frame`` is an image a tracker takes, of ``size`` ``(width, height)``
-    (pixels) and :func:`frame_layout` ``layout`` if given: what every tracker's ``update`` needs (a frame of
-    another size mid-stream would be tracked in the wrong place, and one of other channels or element type
-    against models built from colour or from the first frame's range).
-
-    An image is ``(H, W)`` or ``(H, W, 1)`` grey, ``(H, W, 3)`` BGR or ``(H, W, 4)`` BGRA, not empty, of uint8 (as
-    ``cv2.VideoCapture`` and ``cv2.imread`` give) or float32 with values from 0 to 255. Other element types are
-    refused rather than guessed at: a float image from 0 to 1 (scikit-image's convention) would track on a
-    different scale of contrast, and OpenCV's trackers take neither float64 nor 16-bit images.
-    """
-    if frame.ndim not in (2, 3) or (frame.ndim == 3 and frame.shape[2] not in (1, 3, 4)) or frame.size == 0:
-        raise UsageError(f"a frame must be an (H, W) grey or (H, W, 3) colour image (or 1 or 4 channels), got "
-                         f"shape {frame.shape}")
-    if frame.dtype != np.uint8 and frame.dtype != np.float32:
-        if np.issubdtype(frame.dtype, np.floating):
-            how = "frame.astype(np.float32) for values 0 to 255, (frame * 255).clip(0, 255).astype(np.uint8) for 0 to 1"
-        elif frame.dtype == np.uint16:
-            how = ("(frame >> 8).astype(np.uint8) (one scale for every frame of a video: cv2.normalize's NORM_MINMAX "
-                   "would rescale each frame on its own)")
-        else:
-            how = "one scale for the whole video into 0 to 255, then .astype(np.uint8)"
-        raise UsageError(f"a frame must be uint8 (or float32 with values 0 to 255), got {frame.dtype}; convert it "
-                         f"first, e.g. {how}")
-    if size is not None and (frame.shape[1], frame.shape[0]) != size:
-        raise UsageError(f"every frame must have the size of the first ({size[0]}x{size[1]} pixels), got "
-                         f"{frame.shape[1]}x{frame.shape[0]}")
-    if layout is not None and frame_layout(frame) != layout:
-        raise UsageError(f"every frame must be laid out as the first ({_layout_name(*layout)}), got "
-                         f"{_layout_name(*frame_layout(frame))}; convert the frames alike")
-
-
-def _layout_name(channels: int, dtype) -> str:
-    return f"{_CHANNEL_NAMES[channels]} {np.dtype(dtype).name}"
-
-
 def check_start(frame: np.ndarray, roi) -> Ellipse:
     """``roi`` as an :class:`Ellipse` (:func:`~logpolar_track.geometry.as_ellipse`: also a ``--roi`` string or its
-    numbers), once ``frame`` is known to be an image (:func:`check_frame`) and the ROI to fit it
+    numbers), once ``frame`` is known to be an image (:func:`~logpolar_track.images.check_frame`) and the ROI to fit it
     (:func:`~logpolar_track.geometry.check_roi_fits`): what every tracker's ``init`` needs.
 
     Raises

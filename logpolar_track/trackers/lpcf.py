@@ -93,7 +93,8 @@ from ..colour import ColourLikelihood
 from ..errors import UsageError
 from ..features import locally_normalised, patch_features
 from ..geometry import Ellipse, rotate_screen, wrap_degrees
-from ..logpolar import LogPolarGrid, PhaseCorrelator, to_gray
+from ..images import to_gray
+from ..logpolar import LogPolarGrid, PhaseCorrelator
 from ..refine import AppearanceSubspace, similarity_step
 from ..scale_filter import ScaleFilter
 from ..spectra import CoarseFilter, PackedPhaseCorrelator, PackedSpectra
@@ -1794,7 +1795,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         return self._grey(frame, x0, y0, x1, y1).astype(np.float32, copy=False), x0, y0
 
     def _grey(self, frame, x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
-        """``frame[y0:y1, x0:x1]`` as grey (:func:`~logpolar_track.logpolar.to_gray`): uint8 for uint8 frames,
+        """``frame[y0:y1, x0:x1]`` as grey (:func:`~logpolar_track.images.to_gray`): uint8 for uint8 frames,
         float32 otherwise (float frames keep their range); not to be modified. The frame's first region (the
         blurred crop, the largest) usually covers the later ones, so it is kept and sliced."""
         cache = self._grey_cache

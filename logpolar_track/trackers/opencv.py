@@ -36,8 +36,8 @@ import numpy as np
 
 from ..errors import NotStartedError, RoiError
 from ..geometry import Ellipse
-from ..logpolar import to_bgr
-from .base import Tracker, TrackState, check_frame, check_ranges, check_start, frame_layout, register
+from ..images import check_frame, frame_layout, to_bgr
+from .base import Tracker, TrackState, check_ranges, check_start, register
 
 _CONTRIB_HINT = ("needs opencv-contrib-python-headless instead of opencv-python-headless "
                  "(swap them: pip uninstall opencv-python-headless && pip install opencv-contrib-python-headless)")

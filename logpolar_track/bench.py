@@ -34,7 +34,7 @@ from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_thread
 from .geometry import Ellipse
 from .look import PLOT_SUFFIXES, check_image_suffix, matplotlib_hint
 from .trackers import create_tracker, tracker_class, tracker_names
-from .outputs import writes_in_place, written_into_place
+from .outputs import written_into_place
 from .trackers import opencv as _opencv_peers  # noqa: F401  (registers cv-mil, cv-kcf, cv-csrt)
 
 #: Version of the JSON document written by :func:`bench_document`; bump on incompatible changes.
@@ -653,29 +653,6 @@ def bench_document(results: list[dict], summary: list[dict], sequences: list[Seq
     })
 
 
-def write_text_atomic(path, text: str, *, overwrite: bool = True) -> None:
-    """Write ``text`` to ``path`` via a temporary file in the same folder, renamed when complete (over an existing
-    file only with ``overwrite``: see :func:`~logpolar_track.outputs.move_into_place`).
-
-    Raises
-    ------
-    OutputError
-        If the folder does not exist or is not writable, or ``path`` exists and ``overwrite`` is False.
-    """
-    path = Path(path)
-    if writes_in_place(path):  # /dev/stdout, a pipe: no temporary file to rename over it
-        try:
-            with open(path, "w", encoding="utf-8") as stream:
-                stream.write(text)
-        except OSError as exc:
-            raise OutputError(f"cannot write JSON output '{path}': {exc.strerror or exc}") from None
-        return
-    if not path.parent.is_dir():
-        raise OutputError(f"cannot write JSON output '{path}': folder '{path.parent}' does not exist")
-    with written_into_place(path, overwrite=overwrite, what="JSON output") as temp:
-        temp.write_text(text, encoding="utf-8")
-
-
 def plot_curves(summary: list[dict], path, caption: str | None = None, *, overwrite: bool = True) -> None:
     """Save OTB-style success (IoU) and precision (centre error) plots, one curve per tracker, as a PNG (or PDF
     or SVG, as ``path`` ends), under ``caption`` if given (what was run, e.g. "7 sequences played backwards"),
@@ -809,4 +786,4 @@ def eval_document(pred_path, gt_path, metrics: dict, *, per_frame: bool = True, 
 __all__ = ["run_one", "run_bench", "mean_over_starts", "start_roi", "STARTS", "summarise", "format_table",
            "paired_differences", "format_paired", "auc_per_pass", "format_passes",
            "bench_document", "eval_document", "evaluate_run", "plot_curves", "resolve_trackers", "collect_sequences",
-           "default_dataset", "write_text_atomic", "environment", "SCHEMA_VERSION"]
+           "default_dataset", "environment", "SCHEMA_VERSION"]

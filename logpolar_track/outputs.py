@@ -171,3 +171,26 @@ def written_into_place(path: Path, *, overwrite: bool = False, what: str = "outp
         raise OutputError(f"cannot write {what} '{path}': {exc.strerror or exc}") from None
     finally:
         temp.unlink(missing_ok=True)
+
+
+def write_text_atomic(path, text: str, *, overwrite: bool = True, what: str = "JSON output") -> None:
+    """Write ``text`` (UTF-8) to ``path`` via a temporary file in the same folder, renamed when complete (over an
+    existing file only with ``overwrite``: see :func:`move_into_place`); ``what`` the file is, for messages.
+
+    Raises
+    ------
+    OutputError
+        If the folder does not exist or is not writable, or ``path`` exists and ``overwrite`` is False.
+    """
+    path = Path(path)
+    if writes_in_place(path):  # /dev/stdout, a pipe: no temporary file to rename over it
+        try:
+            with open(path, "w", encoding="utf-8") as stream:
+                stream.write(text)
+        except OSError as exc:
+            raise OutputError(f"cannot write {what} '{path}': {exc.strerror or exc}") from None
+        return
+    if not path.parent.is_dir():
+        raise OutputError(f"cannot write {what} '{path}': folder '{path.parent}' does not exist")
+    with written_into_place(path, overwrite=overwrite, what=what) as temp:
+        temp.write_text(text, encoding="utf-8")

@@ -11,11 +11,11 @@ import click
 from ..bench import (STARTS, bench_document, collect_sequences, default_dataset, eval_document, evaluate_run,
                      format_paired,
                      format_passes, format_table, paired_differences, plot_curves, resolve_trackers,
-                     run_bench, summarise, write_text_atomic)
+                     run_bench, summarise)
 from ..errors import UsageError
 from ..executor import TRACKING_OPENCV_THREADS
 from ..look import PLOT_SUFFIXES, check_image_suffix, matplotlib_hint
-from ..outputs import check_output_path
+from ..outputs import check_output_path, write_text_atomic
 from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, PathParam, WholeNumber, check_jobs_or_scheduler, main,
                parse_param_options, require_stdout, write_stdout)
 

@@ -9,8 +9,7 @@ from pathlib import Path
 import click
 
 from ..bench import (STARTS, bench_document, collect_sequences, default_dataset, eval_document, evaluate_run,
-                     format_paired,
-                     format_passes, format_table, paired_differences, plot_curves, resolve_trackers,
+                     format_paired, format_passes, format_table, paired_differences, plot_curves, resolve_trackers,
                      run_bench, summarise)
 from ..errors import UsageError
 from ..executor import TRACKING_OPENCV_THREADS

@@ -34,6 +34,7 @@ from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_thread
 from .geometry import Ellipse
 from .look import PLOT_SUFFIXES, check_image_suffix, matplotlib_hint
 from .trackers import create_tracker, tracker_class, tracker_names
+from .video import VIDEO_EXTENSIONS
 from .outputs import written_into_place
 from .trackers import opencv as _opencv_peers  # noqa: F401  (registers cv-mil, cv-kcf, cv-csrt)
 
@@ -719,7 +720,8 @@ def evaluate_run(prediction, ground_truth, *, video=None) -> tuple[dict, list[st
         Any ground truth :func:`~logpolar_track.datasets.load_ground_truth` reads (a ``.gt.csv``, OTB, VOT or
         UAV123 file, a sequence folder, or a video with its ``.gt.csv`` beside it). Frames are matched by index.
     video : str or Path, optional
-        With a batch's stream (a ``video`` column): the video whose rows are scored.
+        With a batch's stream (a ``video`` column): the video whose rows are scored. Default: ``ground_truth`` when
+        that is a video, among several videos (a stream of one is scored whatever its video's name).
 
     Raises
     ------
@@ -731,7 +733,8 @@ def evaluate_run(prediction, ground_truth, *, video=None) -> tuple[dict, list[st
     """
     prediction, ground_truth = Path(prediction), Path(ground_truth)
     _check_argument_order(prediction, ground_truth)
-    track = read_track_csv(prediction, video)
+    implicit = video is None and ground_truth.suffix.lower() in VIDEO_EXTENSIONS
+    track = read_track_csv(prediction, ground_truth if implicit else video, only_if_several=implicit)
     gt = load_ground_truth(ground_truth)
     metrics = score_track(gt, track)
     if metrics["frames_scored"] == 0:

@@ -720,8 +720,11 @@ class RunTable:
 
 
 def several_videos(path, names: list[str], video=None) -> GroundTruthError:
-    """The error for a batch's stream (a ``video`` column) of several ``names`` where one video's run is needed,
-    none of them ``video`` if that was given."""
+    """The error for a batch's stream (a ``video`` column) of ``names`` where one video's run is needed: several,
+    or none of them ``video`` if that was given."""
+    if len(names) == 1 and video is not None:
+        return GroundTruthError(f"run CSV '{path}' holds the rows of '{names[0]}' only (its 'video' column), not of "
+                                f"'{video}'")
     shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
     what = ("choose one with --video VIDEO, or give one video's run" if video is None
             else f"none of them is '{video}'; give one video's run")
@@ -743,17 +746,20 @@ def same_file(name: str, video, stream=None) -> bool:
         return False
 
 
-def _one_video(path: Path, header: list[str], body: list, video) -> tuple[list[str], list]:
-    """The header and rows of one video of a batch's stream (``video`` its first column), without that column:
-    the only video, or the one whose name is the file ``video``. Its videos' frame numbers overlap, so one video's
-    rows are read, never all of them (eval scored them all against the first one's ground truth)."""
-    names = list(dict.fromkeys(row[0].strip() for _, row in body if row))
-    chosen = names[0] if len(names) == 1 else None
+def _one_video(path: Path, header: list[str], body: list, video, only_if_several: bool) -> tuple[list[str], list]:
+    """The header and rows of one video of a batch's stream (its ``video`` column: the first, as lptrack writes
+    it, or another tool's anywhere), without that column: the one whose name is the file ``video``, or the only
+    one (whatever its name if ``only_if_several``). Its videos' frame numbers overlap, so one video's rows are
+    read, never all of them (eval scored them all against the first one's ground truth)."""
+    k = header.index(VIDEO_COLUMN)
+    names = list(dict.fromkeys(row[k].strip() for _, row in body if len(row) > k))
+    chosen = names[0] if len(names) == 1 and (video is None or only_if_several) else None
     if chosen is None and video is not None:
         chosen = next((name for name in names if same_file(name, video, path)), None)
     if chosen is None:
         raise several_videos(path, names, video)
-    return header[1:], [(line, row[1:]) for line, row in body if row and row[0].strip() == chosen]
+    return (header[:k] + header[k + 1:],
+            [(line, row[:k] + row[k + 1:]) for line, row in body if len(row) > k and row[k].strip() == chosen])
 
 
 #: The columns of a run CSV that hold a number in every row, and the columns among them that must be > 0.
@@ -763,9 +769,11 @@ _POSITIVE_COLUMNS = ("a", "b")
 #: the others reads as: NaN for a time or rotation, 1 for a scale or score.
 OTHER_TOOLS_COLUMNS = ("frame", "cx", "cy", "a", "b", "angle_deg")
 _OTHER_TOOLS_DEFAULTS = {"time_s": "", "scale": "1", "rotation_deg": "", "score": "1"}
+#: What another tool may write in those columns for a value it does not give: NaN.
+_NOT_GIVEN = ("", "nan", "n/a")
 
 
-def read_run_csv(path, video=None, *, other_tools: bool = False) -> RunTable:
+def read_run_csv(path, video=None, *, other_tools: bool = False, only_if_several: bool = False) -> RunTable:
     """Read a run CSV (or its JSON lines, as ``lptrack run`` writes them) and check that it follows the contract:
     the one reader of a run's file, for ``plot``, ``sheet`` and ``eval`` alike.
 
@@ -776,12 +784,16 @@ def read_run_csv(path, video=None, *, other_tools: bool = False) -> RunTable:
     Numbers are read as :func:`~logpolar_track.geometry.parse_number` reads them (no ``nan``, ``inf`` or ``_``).
 
     With ``other_tools`` (what ``lptrack eval`` scores), a CSV whose header is not a run's but names at least
-    :data:`OTHER_TOOLS_COLUMNS`, in any order, is read too, as another tool's track: the columns it has are checked
-    as above, ``time_s`` and ``rotation_deg`` it lacks are NaN, ``scale`` and ``score`` 1, and without a ``status``
-    column the table's ``status`` is empty (how often the track was lost is not known).
+    :data:`OTHER_TOOLS_COLUMNS`, in any order, is read too, as another tool's track: its frames, centres, axes and
+    angles are checked as above; ``time_s``, ``scale``, ``rotation_deg`` and ``score`` empty, ``nan`` or ``n/a`` are
+    NaN (and those it lacks NaN, or 1 for ``scale`` and ``score``); without a ``status`` column, or with it empty
+    throughout, the table's ``status`` is empty (how often the track was lost is not known). Its ``video`` column,
+    if any, may be anywhere.
 
-    A batch's stream (``lptrack run a.mp4 b.mp4 --csv -``) leads with a ``video`` column: its rows of one video are
-    taken, the only one, or the one whose ``video`` names the file ``video`` (a path; see :func:`same_file`).
+    A batch's stream (``lptrack run a.mp4 b.mp4 --csv -``) leads with a ``video`` column (another tool's CSV may have
+    it anywhere): the rows of the video whose name is the file ``video`` are taken (a path; see :func:`same_file`),
+    or without ``video`` those of the only one; ``only_if_several``: ``video`` only chooses among several (eval's
+    ground truth given as the video).
     ``'-'`` reads stdin.
 
     Raises
@@ -796,19 +808,27 @@ def read_run_csv(path, video=None, *, other_tools: bool = False) -> RunTable:
     if other_tools:
         hint += f" (or another tool's CSV with at least the columns {','.join(OTHER_TOOLS_COLUMNS)})"
     header, body = read_data_file(path, "run CSV", hint)
-    if header[:1] == [VIDEO_COLUMN]:
-        header, body = _one_video(path, header, body, video)
+    if header[:1] == [VIDEO_COLUMN] or (other_tools and VIDEO_COLUMN in header):
+        header, body = _one_video(path, header, body, video, only_if_several)
     if not header:
         raise GroundTruthError(f"run CSV '{path}' is empty; {hint}")
+    lenient = False  # another tool's file: its optional columns may be empty (NaN), its statuses absent
     if tuple(header[:len(COLUMNS)]) == COLUMNS:
         place = {column: k for k, column in enumerate(COLUMNS)}
     elif other_tools and set(OTHER_TOOLS_COLUMNS) <= set(header):
         place = {column: header.index(column) for column in COLUMNS if column in header}
+        lenient = True
     else:
+        missing = [column for column in OTHER_TOOLS_COLUMNS if column not in header]
+        if other_tools and len(missing) < len(OTHER_TOOLS_COLUMNS):
+            raise GroundTruthError(f"run CSV '{path}' lacks column(s) {', '.join(missing)}; {hint}")
         got = ",".join(header)[:80]
         raise GroundTruthError(f"run CSV '{path}' has the header '{got}'; {hint}")
     if not body:
         raise GroundTruthError(f"run CSV '{path}' has a header but no rows")
+    if lenient and "status" in place and not any(len(row) > place["status"] and row[place["status"]].strip()
+                                                 for _, row in body):
+        del place["status"]  # a status column left empty throughout: how often it was lost is not known
     needed = max(place.values()) + 1
     table: dict[str, list] = {c: [] for c in COLUMNS}
     for line, row in body:
@@ -821,7 +841,8 @@ def read_run_csv(path, video=None, *, other_tools: bool = False) -> RunTable:
         def bad(column: str, what: str) -> GroundTruthError:
             return GroundTruthError(f"run CSV '{path}' line {line}: {column} '{fields[column]}' is not {what}")
         text = fields["frame"]
-        if not (text.isascii() and text.isdigit()):  # int() takes '1_0' and ' 1', float() '1.0'
+        # int() takes '1_0' and ' 1', float() '1.0'; 19 digits and more overflow the table's int64.
+        if not (text.isascii() and text.isdigit() and len(text) < 19):
             raise bad("frame", "a frame index (integer >= 0)")
         frame = int(text)
         if table["frame"] and frame <= table["frame"][-1]:
@@ -829,7 +850,8 @@ def read_run_csv(path, video=None, *, other_tools: bool = False) -> RunTable:
                                    f"{table['frame'][-1]}; a run's frames increase")
         table["frame"].append(frame)
         for column in _NUMBER_COLUMNS:
-            if column == "time_s" and "time_s" not in place:
+            if (column == "time_s" and "time_s" not in place) or (
+                    lenient and column in _OTHER_TOOLS_DEFAULTS and fields[column].lower() in _NOT_GIVEN):
                 table[column].append(math.nan)
                 continue
             value = parse_number(fields[column])
@@ -839,7 +861,7 @@ def read_run_csv(path, video=None, *, other_tools: bool = False) -> RunTable:
                 raise bad(column, "a number > 0")
             table[column].append(value)
         rotation = fields["rotation_deg"]
-        value = parse_number(rotation) if rotation else math.nan
+        value = parse_number(rotation) if rotation and not (lenient and rotation.lower() in _NOT_GIVEN) else math.nan
         if value is None:
             raise bad("rotation_deg", "a number or empty (a tracker that does not measure rotation)")
         table["rotation_deg"].append(value)
@@ -848,7 +870,7 @@ def read_run_csv(path, video=None, *, other_tools: bool = False) -> RunTable:
             if broken is not None:
                 raise bad(*broken)
             table["status"].append(fields["status"])
-        elif not 0.0 <= table["score"][-1] <= 1.0:
+        elif not 0.0 <= table["score"][-1] <= 1.0 and not math.isnan(table["score"][-1]):
             raise bad("score", "in [0, 1]")
     t = {c: np.asarray(v, float) for c, v in table.items() if c not in ("frame", "status")}
     return RunTable(np.asarray(table["frame"], int), t["time_s"],
@@ -856,10 +878,10 @@ def read_run_csv(path, video=None, *, other_tools: bool = False) -> RunTable:
                     t["rotation_deg"], t["score"], table["status"], path.name)
 
 
-def read_track_csv(path, video=None) -> Track:
+def read_track_csv(path, video=None, *, only_if_several: bool = False) -> Track:
     """A run CSV read by :func:`read_run_csv` (the same checks, the same messages), or another tool's CSV
     (``other_tools``), as the :class:`Track` that :func:`score_track` scores: what ``lptrack eval`` reads."""
-    return read_run_csv(path, video, other_tools=True).track()
+    return read_run_csv(path, video, other_tools=True, only_if_several=only_if_several).track()
 
 
 # ----------------------------------------------------------------------------------------------------------

@@ -243,6 +243,8 @@ def parse_numbers(text: str, what: str, expected: str) -> list[float]:
     values = [parse_number(f) for f in fields]
     bad = next((f for f, v in zip(fields, values) if v is None), None)
     if bad is not None:
+        if _PLAIN_NUMBER.fullmatch(bad.replace("\u2212", "-")):  # written as a number, beyond a float's range
+            raise RoiError(f"{what} '{text}': '{bad}' is too large a number; expected {expected}")
         raise RoiError(f"{what} '{text}' is not a list of numbers: '{bad}' is not a number (give {NUMBER_RULE}); "
                        f"expected {expected}")
     return values

@@ -55,8 +55,8 @@ ROI_COLOUR = (255, 0, 255)
 #: Default relative tolerance under which a fitted ellipse is reported as a circle: ``(a - b) / a``.
 ROUND_TOLERANCE = 0.02
 #: What :func:`roi_from_box` and :func:`roi_from_points` take as text, for messages.
-BOX_SYNTAX = "x,y,w,h (top-left corner and size in pixels)"
-POINTS_SYNTAX = "x1,y1,x2,y2,... (pixels on the object's outline)"
+BOX_SYNTAX = "x,y,w,h (top-left corner and size in pixels; ';' separates too)"
+POINTS_SYNTAX = "x1,y1,x2,y2,... (pixels on the object's outline; 'x1,y1;x2,y2;...' too)"
 #: Hint shown when matplotlib is missing.
 PLOT_HINT = "pip install matplotlib"
 
@@ -406,7 +406,9 @@ def roi_from_box(box, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
         Not 4 numbers (read as :func:`~logpolar_track.geometry.parse_numbers` reads them: plain decimals, no ``_``,
         ``nan`` or ``inf``), or a side <= 0.
     """
-    values = parse_numbers(box, "box", BOX_SYNTAX) if isinstance(box, str) else [float(v) for v in box]
+    # Semicolons separate too (x,y;w,h), as before there was one reader of number lists.
+    values = (parse_numbers(box.replace(";", ","), "box", BOX_SYNTAX) if isinstance(box, str)
+              else [float(v) for v in box])
     if len(values) != 4:
         raise RoiError(f"box '{box}' has {counted(len(values), 'number')}; expected {BOX_SYNTAX}")
     x, y, w, h = values
@@ -472,7 +474,7 @@ def roi_from_points(points, *, round_tolerance: float = ROUND_TOLERANCE) -> Elli
     around the whole object.
     """
     if isinstance(points, str):
-        values = parse_numbers(points, "points", POINTS_SYNTAX)
+        values = parse_numbers(points.replace(";", ","), "points", POINTS_SYNTAX)  # 'x1,y1;x2,y2' too
         if len(values) % 2:
             raise RoiError(f"points give {len(values)} numbers; expected pairs x1,y1,x2,y2,... (pixels)")
         given = np.asarray(values, float).reshape(-1, 2)

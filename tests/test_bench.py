@@ -707,6 +707,16 @@ def test_evaluate_run_is_what_eval_does_from_python(dataset, tmp_path):
     assert notes == [f"'{pred}' has no row for 2 of the {N_FRAMES} frames with ground truth; they are not scored"]
     with pytest.raises(UsageError, match="is ground truth \\(a .gt.csv\\), not a run; the run's CSV goes first"):
         evaluate_run(dataset / "alpha.gt.csv", pred)
+    # A batch's stream against a video's ground truth: that video's rows, as eval scores them (the choice was the
+    # CLI's alone, so evaluate_run refused the stream).
+    stream = tmp_path / "all.csv"
+    header = [f"video,{line}" for line in pred.read_text().splitlines()[:1]]
+    for name in ("alpha", "beta"):
+        _write_run_csv(tmp_path / "one.csv", _TRUTH[(dataset / f"{name}.roi").read_text().strip()])
+        header += [f"{dataset / name}.avi,{line}" for line in (tmp_path / "one.csv").read_text().splitlines()[1:]]
+    stream.write_text("\n".join(header) + "\n")
+    metrics, _ = evaluate_run(stream, dataset / "alpha.avi")
+    assert metrics["frames_scored"] == N_FRAMES and metrics["centre_error_median_px"] == pytest.approx(0, abs=1e-3)
 
 
 def test_eval_to_a_stdout_that_cannot_encode_its_table_is_one_error_line(dataset, tmp_path):
@@ -724,9 +734,10 @@ def test_eval_rejects_unreadable_prediction(dataset, tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("frame,cx\n0,1\n")
     res = _run("eval", bad, dataset / "alpha.gt.csv")
-    assert res.exit_code == 1 and res.stderr == (f"lptrack: error: run CSV '{bad}' has the header 'frame,cx'; expected "
-                                                 f"an lptrack run CSV with the header {','.join(COLUMNS)}, or its JSON "
-                                                 f"lines (or another tool's CSV with at least the columns "
+    assert res.exit_code == 1 and res.stderr == (f"lptrack: error: run CSV '{bad}' lacks column(s) cy, a, b, "
+                                                 f"angle_deg; expected an lptrack run CSV with the header "
+                                                 f"{','.join(COLUMNS)}, or its JSON lines (or another tool's CSV with "
+                                                 f"at least the columns "
                                                  f"frame,cx,cy,a,b,angle_deg)\n")
 
 

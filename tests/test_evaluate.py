@@ -314,9 +314,40 @@ def test_read_gt_csv_and_run_csv(tmp_path):
         run.write_text(f"angle_deg,frame,cx,cy,a,b\n{body}\n")
         with pytest.raises(GroundTruthError, match=f"line 2: {said}"):
             read_track_csv(run)
-    run.write_text("frame,cx,cy,a,b,angle_deg,status\n0,50,40,20,10,30,\n")
-    with pytest.raises(GroundTruthError, match="line 2: status '' is not one of init, tracked, lost"):
+    # What it does not give may be empty, nan or n/a; a status column left empty throughout is none, one mixing
+    # statuses with empty fields is refused.
+    run.write_text("frame,cx,cy,a,b,angle_deg,time_s,scale,rotation_deg,score,status,video\n"
+                   "0,50,40,20,10,30,,n/a,nan,,,clip.mp4\n")
+    track = read_track_csv(run)
+    assert np.isnan([track.scale[0], track.rotation_deg[0], track.score[0]]).all() and track.status == []
+    run.write_text("frame,cx,cy,a,b,angle_deg,status\n0,50,40,20,10,30,tracked\n1,50,40,20,10,30,\n")
+    with pytest.raises(GroundTruthError, match="line 3: status '' is not one of init, tracked, lost"):
         read_track_csv(run)
+    run.write_text("frame,cx,cy,a,b,angle\n0,50,40,20,10,30\n")
+    with pytest.raises(GroundTruthError, match="lacks column\\(s\\) angle_deg; expected an lptrack run CSV"):
+        read_track_csv(run)
+    # Frame numbers beyond int64 (a table's) are no frame index, not an overflow.
+    run.write_text("frame,cx,cy,a,b,angle_deg\n0,50,40,20,10,30\n9223372036854775808,50,40,20,10,30\n")
+    with pytest.raises(GroundTruthError, match="line 3: frame '9223372036854775808' is not a frame index"):
+        read_track_csv(run)
+
+
+def test_another_tools_stream_is_chosen_from_by_its_video_column_anywhere(tmp_path):
+    """eval found a 'video' column anywhere in another tool's header; the one reader looked only at the first."""
+    run = tmp_path / "other.csv"
+    for name in ("a.mp4", "b.mp4"):
+        (tmp_path / name).write_bytes(b"")  # a video named by the column is a file beside the stream
+    lines = [f"{k},{50 + k},40,20,10,30,{name}" for name in ("a.mp4", "b.mp4") for k in range(3)]
+    run.write_text("frame,cx,cy,a,b,angle_deg,video\n" + "\n".join(lines) + "\n")
+    assert read_track_csv(run, tmp_path / "b.mp4").frames.tolist() == [0, 1, 2]
+    with pytest.raises(GroundTruthError, match="holds the rows of 2 videos"):
+        read_track_csv(run)
+    run.write_text("frame,cx,cy,a,b,angle_deg,video\n" + "\n".join(lines[:3]) + "\n")
+    # One video: scored without --video, but a --video naming another is refused (it scored the wrong rows).
+    assert len(read_track_csv(run).frames) == 3
+    with pytest.raises(GroundTruthError, match="holds the rows of 'a.mp4' only \\(its 'video' column\\), not of"):
+        read_track_csv(run, tmp_path / "b.mp4")
+    assert len(read_track_csv(run, tmp_path / "b.mp4", only_if_several=True).frames) == 3
     (tmp_path / "bad.csv").write_text("frame,cx\n0,1\n")
     with pytest.raises(GroundTruthError, match="lacks column"):
         read_gt_csv(tmp_path / "bad.csv")

@@ -323,9 +323,9 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, vid
     """
     from ..video import VIDEO_EXTENSIONS
     _check_json_out(json_out, overwrite)
-    if video is None and ground_truth.suffix.lower() in VIDEO_EXTENSIONS:
-        video = ground_truth  # its rows, if PRED.csv is a batch's stream
     metrics, notes = evaluate_run(prediction, ground_truth, video=video)
+    if video is None and ground_truth.suffix.lower() in VIDEO_EXTENSIONS:
+        video = ground_truth  # the video scored, for the JSON (evaluate_run chose its rows of a stream so)
     for note in notes:
         click.echo(f"lptrack: note: {note}", err=True)
     row = {"sequence": prediction.name, "tracker": "(csv)", **metrics}

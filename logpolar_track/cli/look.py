@@ -213,7 +213,7 @@ def sheet(video: Path, run_csv: Path, out_png: Path | None, cols: int, rows: int
         raise UsageError(f"--rows and --count contradict each other: --rows {rows} shows {cols} x {rows} frames, "
                          f"--count {count} shows {count} frames in {cols} columns; give one of them")
     out_png = _default_png(run_csv, out_png, "sheet")
-    table = read_run_csv(run_csv, video)
+    table = read_run_csv(run_csv, video, only_if_several=True)  # VIDEO is what to draw on, a copy or not
     path = write_contact_sheet(video, table, out_png, cols=cols, rows=rows, count=count, width=width,
                                overwrite=overwrite)
     write_stdout(str(path) + "\n")

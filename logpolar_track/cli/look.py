@@ -162,7 +162,7 @@ def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path 
     if no_video and video is not None:
         raise UsageError("--video and --no-video contradict each other; give one of them")
     out_png = _default_png(run_csv, out_png, "plot")
-    table = read_run_csv(run_csv, video)
+    table = read_run_csv(run_csv, video, only_if_several=True)  # --video is also the thumbnail's, a copy or not
     note = None
     if video is None and not no_video and str(run_csv) == "-":
         note = ("lptrack: note: no thumbnail: the run came from stdin; give the tracked video with --video VIDEO (or "

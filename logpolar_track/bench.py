@@ -733,8 +733,8 @@ def evaluate_run(prediction, ground_truth, *, video=None) -> tuple[dict, list[st
     """
     prediction, ground_truth = Path(prediction), Path(ground_truth)
     _check_argument_order(prediction, ground_truth)
-    implicit = video is None and ground_truth.suffix.lower() in VIDEO_EXTENSIONS
-    track = read_track_csv(prediction, ground_truth if implicit else video, only_if_several=implicit)
+    scored = scored_video(ground_truth, video)
+    track = read_track_csv(prediction, scored, only_if_several=video is None)
     gt = load_ground_truth(ground_truth)
     metrics = score_track(gt, track)
     if metrics["frames_scored"] == 0:
@@ -752,6 +752,14 @@ def evaluate_run(prediction, ground_truth, *, video=None) -> tuple[dict, list[st
                      f"past the end of '{ground_truth}' ({len(gt)} frames); they are not scored (is it this video's "
                      f"ground truth?)")
     return metrics, notes
+
+
+def scored_video(ground_truth, video=None):
+    """The video whose rows of a batch's stream ``lptrack eval`` scores: ``video``, or else the ground truth when it
+    is given as a video (then it chooses only among several videos), or None."""
+    if video is None and Path(ground_truth).suffix.lower() in VIDEO_EXTENSIONS:
+        return Path(ground_truth)
+    return video
 
 
 def _check_argument_order(prediction: Path, ground_truth: Path) -> None:
@@ -788,5 +796,5 @@ def eval_document(pred_path, gt_path, metrics: dict, *, per_frame: bool = True, 
 
 __all__ = ["run_one", "run_bench", "mean_over_starts", "start_roi", "STARTS", "summarise", "format_table",
            "paired_differences", "format_paired", "auc_per_pass", "format_passes",
-           "bench_document", "eval_document", "evaluate_run", "plot_curves", "resolve_trackers", "collect_sequences",
-           "default_dataset", "environment", "SCHEMA_VERSION"]
+           "bench_document", "eval_document", "evaluate_run", "scored_video", "plot_curves", "resolve_trackers",
+           "collect_sequences", "default_dataset", "environment", "SCHEMA_VERSION"]

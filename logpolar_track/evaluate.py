@@ -850,8 +850,8 @@ def read_run_csv(path, video=None, *, other_tools: bool = False, only_if_several
                                    f"{table['frame'][-1]}; a run's frames increase")
         table["frame"].append(frame)
         for column in _NUMBER_COLUMNS:
-            if (column == "time_s" and "time_s" not in place) or (
-                    lenient and column in _OTHER_TOOLS_DEFAULTS and fields[column].lower() in _NOT_GIVEN):
+            # (A column another tool's file lacks reads as its default: '' for time_s, so NaN too.)
+            if lenient and column in _OTHER_TOOLS_DEFAULTS and fields[column].lower() in _NOT_GIVEN:
                 table[column].append(math.nan)
                 continue
             value = parse_number(fields[column])
@@ -865,13 +865,12 @@ def read_run_csv(path, video=None, *, other_tools: bool = False, only_if_several
         if value is None:
             raise bad("rotation_deg", "a number or empty (a tracker that does not measure rotation)")
         table["rotation_deg"].append(value)
-        if "status" in place:
-            broken = off_contract(fields["status"], table["score"][-1])
-            if broken is not None:
-                raise bad(*broken)
-            table["status"].append(fields["status"])
-        elif not 0.0 <= table["score"][-1] <= 1.0 and not math.isnan(table["score"][-1]):
-            raise bad("score", "in [0, 1]")
+        status = fields["status"] if "status" in place else None
+        broken = off_contract(status, table["score"][-1])
+        if broken is not None:
+            raise bad(*broken)
+        if status is not None:
+            table["status"].append(status)
     t = {c: np.asarray(v, float) for c, v in table.items() if c not in ("frame", "status")}
     return RunTable(np.asarray(table["frame"], int), t["time_s"],
                     np.column_stack([t["cx"], t["cy"], t["a"], t["b"], t["angle_deg"]]), t["scale"],

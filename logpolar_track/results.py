@@ -57,10 +57,11 @@ FORMATS: dict[str, str] = {"csv": ".csv", "jsonl": ".jsonl"}
 STATUSES: tuple[str, ...] = ("init", "tracked", "lost")
 
 
-def off_contract(status: str, score: float) -> tuple[str, str] | None:
+def off_contract(status: str | None, score: float) -> tuple[str, str] | None:
     """Where a row read back breaks the contract in its ``status`` or ``score``: ``(column, what it must be)``,
-    or None. A NaN score is not judged here (a reader decides whether an empty field may stand)."""
-    if status not in STATUSES:
+    or None. A NaN score is not judged here (a reader decides whether an empty field may stand), nor a ``status``
+    of None (another tool's file without one)."""
+    if status is not None and status not in STATUSES:
         return "status", f"one of {', '.join(STATUSES)}"
     if not 0.0 <= score <= 1.0 and not math.isnan(score):
         return "score", "in [0, 1]"

@@ -10,7 +10,7 @@ import click
 
 from ..bench import (STARTS, bench_document, collect_sequences, default_dataset, eval_document, evaluate_run,
                      format_paired, format_passes, format_table, paired_differences, plot_curves, resolve_trackers,
-                     run_bench, summarise)
+                     run_bench, scored_video, summarise)
 from ..errors import UsageError
 from ..executor import TRACKING_OPENCV_THREADS
 from ..look import PLOT_SUFFIXES, check_image_suffix, matplotlib_hint
@@ -321,11 +321,9 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, vid
     (any order) is scored too, its values checked alike, and without a
     status column it has no lost% or off_tracked% (n/a).
     """
-    from ..video import VIDEO_EXTENSIONS
     _check_json_out(json_out, overwrite)
     metrics, notes = evaluate_run(prediction, ground_truth, video=video)
-    if video is None and ground_truth.suffix.lower() in VIDEO_EXTENSIONS:
-        video = ground_truth  # the video scored, for the JSON (evaluate_run chose its rows of a stream so)
+    video = scored_video(ground_truth, video)  # for the JSON: the video evaluate_run chose a stream's rows by
     for note in notes:
         click.echo(f"lptrack: note: {note}", err=True)
     row = {"sequence": prediction.name, "tracker": "(csv)", **metrics}

@@ -32,10 +32,10 @@ from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCE
                        auc, read_track_csv, score_track, success_curve)
 from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_threads, run_tasks
 from .geometry import Ellipse
-from .look import PLOT_SUFFIXES, check_image_suffix, matplotlib_hint
+from .outputs import check_image_suffix, written_into_place
+from .plot import PLOT_SUFFIXES, matplotlib_hint
 from .trackers import create_tracker, tracker_class, tracker_names
 from .video import VIDEO_EXTENSIONS
-from .outputs import written_into_place
 from .trackers import opencv as _opencv_peers  # noqa: F401  (registers cv-mil, cv-kcf, cv-csrt)
 
 #: Version of the JSON document written by :func:`bench_document`; bump on incompatible changes.

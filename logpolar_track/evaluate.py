@@ -1,5 +1,6 @@
 """Ground truth readers and accuracy metrics, shared by ``lptrack bench`` and ``lptrack eval``, and the one reader
-of a run's CSV (:func:`read_run_csv`), which ``eval``, ``plot`` and ``sheet`` share.
+of a run's CSV (:func:`read_run_csv`; :func:`as_run_table` for a path, a table or results), which ``eval``,
+``plot`` and ``sheet`` share.
 
 Conventions
 -----------
@@ -57,6 +58,7 @@ All metric functions are pure functions of numpy arrays.
 from __future__ import annotations
 
 import math
+import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -875,6 +877,16 @@ def read_run_csv(path, video=None, *, other_tools: bool = False, only_if_several
     return RunTable(np.asarray(table["frame"], int), t["time_s"],
                     np.column_stack([t["cx"], t["cy"], t["a"], t["b"], t["angle_deg"]]), t["scale"],
                     t["rotation_deg"], t["score"], table["status"], path.name)
+
+
+def as_run_table(run) -> RunTable:
+    """``run`` as a :class:`RunTable`: a table as it is, a path read with :func:`read_run_csv` (checked against the
+    contract), or :class:`~logpolar_track.results.FrameResult` values (:meth:`RunTable.from_results`)."""
+    if isinstance(run, RunTable):
+        return run
+    if isinstance(run, (str, os.PathLike)):
+        return read_run_csv(run)
+    return RunTable.from_results(run)
 
 
 def read_track_csv(path, video=None, *, only_if_several: bool = False) -> Track:

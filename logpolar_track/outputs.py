@@ -2,7 +2,8 @@
 
 Every file lptrack writes (CSV, video, PNG, JSON, plots, sample videos) goes through here, so that a run that
 fails or is stopped never leaves a file that looks finished, and an existing output is replaced only when asked
-(``--overwrite``). Devices, pipes and ``/dev/stdout`` are written directly (:func:`writes_in_place`).
+(``--overwrite``). Devices, pipes and ``/dev/stdout`` are written directly (:func:`writes_in_place`). Images:
+:func:`check_image_suffix` checks an image's file name before any work, :func:`write_png` writes a PNG.
 """
 
 from __future__ import annotations
@@ -13,7 +14,10 @@ import os
 from pathlib import Path
 from typing import Iterator
 
-from .errors import OutputError
+import cv2
+import numpy as np
+
+from .errors import OutputError, UsageError
 
 #: Bytes in a file name most file systems take (ext4, XFS, APFS, NTFS's 255 UTF-16 units are more).
 _NAME_MAX = 255
@@ -194,3 +198,32 @@ def write_text_atomic(path, text: str, *, overwrite: bool = True, what: str = "J
         raise OutputError(f"cannot write {what} '{path}': folder '{path.parent}' does not exist")
     with written_into_place(path, overwrite=overwrite, what=what) as temp:
         temp.write_text(text, encoding="utf-8")
+
+
+def check_image_suffix(path, suffixes: tuple[str, ...], what: str) -> None:
+    """Raise :class:`UsageError` unless ``path`` ends in one of ``suffixes`` (checked before any work)."""
+    if Path(path).suffix.lower() not in suffixes:
+        names = " or ".join(suffixes)
+        raise UsageError(f"cannot write {what} '{path}': give a file name ending in {names}")
+
+
+def write_png(path, image: np.ndarray, *, overwrite: bool = False, what: str = "output image") -> Path:
+    """Write ``image`` as PNG atomically (temporary name in the same folder, then rename); return the path.
+
+    Raises
+    ------
+    UsageError
+        ``path`` does not end in .png.
+    OutputError
+        Folder missing or unwritable, file exists without ``overwrite``, or encoding failed.
+    """
+    check_image_suffix(path, (".png",), what)
+    path = check_output_path(path, overwrite=overwrite, what=what)
+    # Encoded in memory and written by Python: a full disk is then one OSError ("No space left on device"),
+    # where cv2.imwrite let libpng print its own line first, and any name the file system takes will do.
+    ok, encoded = cv2.imencode(".png", image)
+    if not ok:
+        raise OutputError(f"cannot write {what} '{path}': PNG encoding failed")
+    with written_into_place(path, overwrite=overwrite, what=what) as temp:
+        temp.write_bytes(encoded.tobytes())
+    return path

@@ -2,7 +2,9 @@
 
 :func:`track_video` yields a :class:`~logpolar_track.results.FrameResult` per frame (a library call, no
 files written); :func:`run_video` does what ``lptrack run`` does: tracks, writes the annotated video and the
-CSV atomically, and returns a :class:`RunSummary`.
+CSV atomically, and returns a :class:`RunSummary`. The names of a run's files are here too: its outputs
+(:func:`default_outputs`), its ROI sidecar (:func:`roi_sidecar_paths`), and back from a run CSV to the video it
+was made from (:func:`find_video_for_csv`).
 """
 
 from __future__ import annotations
@@ -26,8 +28,8 @@ from .images import within_0_255
 from .results import CsvWriter, FrameResult
 from .trackers import DEFAULT_TRACKER, Tracker, create_tracker
 from .outputs import check_output_path, writes_in_place
-from .video import (CODECS_BY_EXTENSION, VideoReader, VideoWriter, check_frame_number, frames_to_track,
-                    is_image_sequence, video_stem)
+from .video import (CODECS_BY_EXTENSION, VIDEO_EXTENSIONS, VideoReader, VideoWriter, check_frame_number,
+                    frames_to_track, guess_image_sequence, is_image_sequence, video_stem)
 
 #: Suffixes appended to the video's stem for the default output names.
 VIDEO_OUT_SUFFIX = ".lptrack.mp4"
@@ -44,6 +46,66 @@ def default_outputs(video_path, folder=".", name: str | None = None) -> tuple[Pa
     stem = video_stem(video_path) if name is None else name
     folder = Path(folder)
     return folder / f"{stem}{VIDEO_OUT_SUFFIX}", folder / f"{stem}{CSV_OUT_SUFFIX}"
+
+
+def _video_stem(csv_path: Path) -> str:
+    """``clip`` for ``clip.lptrack.csv``, ``clip.lptrack.jsonl`` (``lptrack run``'s default names) or ``clip.csv``."""
+    for suffix in (CSV_OUT_SUFFIX, ".lptrack.jsonl"):
+        if csv_path.name.endswith(suffix) and len(csv_path.name) > len(suffix):
+            return csv_path.name[:-len(suffix)]
+    return csv_path.stem
+
+
+def _video_search(csv_path, folders: Sequence) -> tuple[str, list[tuple[Path, list[Path]]]]:
+    """The stem looked for, and each folder searched (each once, in order) with the videos found there."""
+    csv_path = Path(csv_path)
+    stem = _video_stem(csv_path)
+    searched, seen = [], set()
+    for folder in [csv_path.parent, *map(Path, folders)]:
+        key = folder.resolve()
+        if key in seen:
+            continue
+        seen.add(key)
+        found = [folder / f"{stem}{ext}" for ext in VIDEO_EXTENSIONS if (folder / f"{stem}{ext}").is_file()]
+        # 'lptrack run img/%04d.jpg' names its CSV after the folder, img.lptrack.csv (OTB's layout).
+        sequence = guess_image_sequence(folder / stem) if (folder / stem).is_dir() else None
+        searched.append((folder, found + ([sequence] if sequence is not None else [])))
+    return stem, searched
+
+
+def find_video_for_csv(csv_path, folders: Sequence = (".",)) -> Path | None:
+    """The video a run CSV was made from, when that is obvious; else None.
+
+    A run CSV does not name its video. ``<stem>.lptrack.csv`` (``lptrack run``'s default name; or
+    ``<stem>.lptrack.jsonl``) or ``<stem>.csv`` is matched with ``<stem>`` plus one of
+    :data:`~logpolar_track.video.VIDEO_EXTENSIONS`, or with a folder ``<stem>`` of numbered images (as an
+    image-sequence pattern, ``img/%04d.jpg`` for ``img.lptrack.csv``), in the CSV's folder, then in ``folders``; the
+    first folder with exactly one such source wins. Annotated outputs (``*.lptrack.*``) are never chosen.
+    :func:`describe_video_search` says why none was found.
+    """
+    for _, found in _video_search(csv_path, folders)[1]:
+        if len(found) == 1:
+            return found[0]
+    return None
+
+
+def describe_video_search(csv_path, folders: Sequence = (".",)) -> str:
+    """Where :func:`find_video_for_csv` looked for the video of ``csv_path`` and why it took none, as a phrase
+    for a message (``no clip.mp4 (or .avi, ...) in 'runs' or the current folder``)."""
+    stem, searched = _video_search(csv_path, folders)
+    here = Path.cwd().resolve()
+
+    def place(folder: Path) -> str:
+        return "the current folder" if folder.resolve() == here else f"'{folder}'"
+
+    several = [(folder, found) for folder, found in searched if len(found) > 1]
+    if several:
+        folder, found = several[0]
+        names = ", ".join(str(p.relative_to(folder)) for p in found)  # img/%04d.jpg for a sequence
+        return f"{place(folder)} holds several videos it could be ({names})"
+    others = ", ".join(VIDEO_EXTENSIONS[1:6]) + ", ..."
+    return (f"no {stem}{VIDEO_EXTENSIONS[0]} (or {others}, or a folder {stem}/ of numbered images) in "
+            f"{' or '.join(place(f) for f, _ in searched)}")
 
 
 def mirrored_path(path) -> Path:

@@ -911,7 +911,7 @@ def test_a_frame_at_a_time_of_a_varying_rate_is_found_by_its_timestamps(tiny_vid
     """lptrack frame --time: frame 11 is at (11 + 10) / 30 = 0.7 s by its stamp (round(0.7 x 30) = 21 lies past
     the end of the 20 frames), and its caption's time is the run's."""
     import logpolar_track.video as video_module
-    from logpolar_track.look import read_frame
+    from logpolar_track.video import read_frame
 
     monkeypatch.setattr(video_module, "_open_capture", _DroppedFrames)
     frame = read_frame(tiny_video.path, time_s=0.7)

@@ -94,7 +94,7 @@ def test_grey_frame_and_state_far_off_frame():
 def test_drawing_takes_every_frame_a_tracker_takes():
     """draw_grid raised ValueError on a BGRA frame and cv2.error on float32; draw_roi an AttributeError on a --roi
     string (a fresh review of the library)."""
-    from logpolar_track.look import draw_grid, draw_roi
+    from logpolar_track.draw import draw_grid, draw_roi
 
     bgr = np.random.default_rng(0).integers(0, 255, (100, 120, 3), np.uint8)
     variants = [bgr, np.dstack([bgr, np.full((100, 120), 255, np.uint8)]), bgr.astype(np.float32)]

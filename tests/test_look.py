@@ -1,4 +1,7 @@
-"""``lptrack frame``/``roi``/``plot``/``sheet`` and the library underneath (:mod:`logpolar_track.look`).
+"""``lptrack frame``/``roi``/``plot``/``sheet`` and the library underneath (:mod:`logpolar_track.frame_png`,
+:mod:`~logpolar_track.roi_fit`, :mod:`~logpolar_track.plot`, :mod:`~logpolar_track.contact_sheet`, and
+:func:`~logpolar_track.video.read_frame`, :func:`~logpolar_track.draw.draw_grid`,
+:func:`~logpolar_track.pipeline.find_video_for_csv`).
 
 Frames are compared pixel for pixel with a direct sequential OpenCV read of the same file; ROIs are fitted to
 points on known ellipses; plot and sheet run on a tiny ``lptrack run --tracker diffdecomp`` track.
@@ -22,13 +25,16 @@ from click.testing import CliRunner
 from conftest import decode_all
 
 from logpolar_track.cli import main
+from logpolar_track.contact_sheet import sheet_geometry, write_contact_sheet
+from logpolar_track.draw import GRID_COLOUR, draw_grid
 from logpolar_track.errors import RoiError, UsageError
-from logpolar_track.evaluate import GroundTruthError, read_track_csv
+from logpolar_track.evaluate import GroundTruthError, read_run_csv, read_track_csv
 from logpolar_track.geometry import Ellipse, parse_roi
-from logpolar_track.look import (GRID_COLOUR, PLOT_DPI, PLOT_SIZE_IN, draw_grid, find_video_for_csv,
-                                 read_frame, read_run_csv, roi_from_box, roi_from_points, sheet_geometry,
-                                 write_contact_sheet)
+from logpolar_track.pipeline import find_video_for_csv
+from logpolar_track.plot import PLOT_DPI, PLOT_SIZE_IN
 from logpolar_track.results import COLUMNS
+from logpolar_track.roi_fit import roi_from_box, roi_from_points
+from logpolar_track.video import read_frame
 
 
 def invoke(*args):

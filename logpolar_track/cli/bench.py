@@ -13,8 +13,8 @@ from ..bench import (STARTS, bench_document, collect_sequences, default_dataset,
                      run_bench, scored_video, summarise)
 from ..errors import UsageError
 from ..executor import TRACKING_OPENCV_THREADS
-from ..look import PLOT_SUFFIXES, check_image_suffix, matplotlib_hint
-from ..outputs import check_output_path, write_text_atomic
+from ..outputs import check_image_suffix, check_output_path, write_text_atomic
+from ..plot import PLOT_SUFFIXES, matplotlib_hint
 from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, PathParam, WholeNumber, check_jobs_or_scheduler, main,
                parse_param_options, require_stdout, write_stdout)
 

@@ -1,7 +1,8 @@
 """``lptrack frame``, ``roi``, ``plot`` and ``sheet``: look at a video before a run and at a track after it.
 
-Thin wrappers over :mod:`logpolar_track.look`. Written files' paths go to stdout (one per line), notes to
-stderr; errors are one ``lptrack: error:`` line.
+Thin wrappers over the library: :mod:`logpolar_track.frame_png` (frame), :mod:`logpolar_track.roi_fit` (roi),
+:mod:`logpolar_track.plot` (plot), :mod:`logpolar_track.contact_sheet` (sheet). Written files' paths go to stdout
+(one per line), notes to stderr; errors are one ``lptrack: error:`` line.
 """
 
 from __future__ import annotations
@@ -11,12 +12,16 @@ from pathlib import Path
 
 import click
 
+from ..contact_sheet import SHEET_ROWS, write_contact_sheet
 from ..errors import UsageError
+from ..evaluate import read_run_csv
+from ..frame_png import write_frame_png
 from ..geometry import check_roi_fits
-from ..look import (PLOT_SUFFIXES, ROUND_TOLERANCE, SHEET_ROWS, check_image_suffix, describe_video_search,
-                    find_video_for_csv, matplotlib_hint, plot_track, read_frame, read_run_csv, roi_from_box,
-                    roi_from_points, write_contact_sheet, write_frame_png)
-from ..video import input_label
+from ..outputs import check_image_suffix
+from ..pipeline import describe_video_search, find_video_for_csv
+from ..plot import PLOT_SUFFIXES, matplotlib_hint, plot_track
+from ..roi_fit import ROUND_TOLERANCE, roi_from_box, roi_from_points
+from ..video import input_label, read_frame
 from . import FrameRate, OneLineErrors, PathParam, WholeNumber, main, parse_roi_option, require_stdout, write_stdout
 
 

@@ -1,0 +1,169 @@
+"""A ROI from what image tools give: an axis-aligned box, or points clicked on the object's outline.
+
+Headless OpenCV has no ``selectROI``; a box (``x,y,w,h``, as image tools and OTB ground truth give it) or points on
+the outline marked in any image viewer are turned into the ellipse ``lptrack run --roi`` takes
+(:func:`roi_from_box`, :func:`roi_from_points`). Pixels with the origin at the top-left corner, x right, y down;
+angles in degrees counter-clockwise as seen on screen. Errors are :class:`~logpolar_track.errors.RoiError`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+from .errors import RoiError, counted
+from .geometry import Ellipse, ellipse_in_box, parse_numbers
+
+#: Default relative tolerance under which a fitted ellipse is reported as a circle: ``(a - b) / a``.
+ROUND_TOLERANCE = 0.02
+#: What :func:`roi_from_box` and :func:`roi_from_points` take as text, for messages.
+BOX_SYNTAX = "x,y,w,h (top-left corner and size in pixels; ';' separates too)"
+POINTS_SYNTAX = "x1,y1,x2,y2,... (pixels on the object's outline; 'x1,y1;x2,y2;...' too)"
+
+
+def _rounded(roi: Ellipse, tolerance: float) -> Ellipse:
+    """``roi`` as a circle of equal area when its axes differ by at most ``tolerance`` (relative)."""
+    if tolerance > 0 and roi.a - roi.b <= tolerance * roi.a:
+        return Ellipse.circle(roi.cx, roi.cy, math.sqrt(roi.a * roi.b))
+    return roi
+
+
+def _normalised(cx: float, cy: float, a: float, b: float, angle_deg: float) -> Ellipse:
+    """The same ellipse with ``a >= b`` and the angle in (-90, 90] (an axis has no direction)."""
+    if b > a:
+        a, b, angle_deg = b, a, angle_deg + 90.0
+    angle = angle_deg % 180.0  # [0, 180): turning an axis by 180 degrees gives the same ellipse
+    if angle > 90.0:
+        angle -= 180.0
+    if a == b:
+        angle = 0.0
+    return Ellipse(cx, cy, a, b, angle + 0.0)
+
+
+def roi_from_box(box, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
+    """The ROI inscribed in an axis-aligned box ``x,y,w,h`` (top-left corner and size in pixels).
+
+    Parameters
+    ----------
+    box : str or sequence of 4 numbers
+        ``"x,y,w,h"`` as image tools and OTB ground truth give it (0-based pixels).
+    round_tolerance : float
+        A box whose sides differ by at most this fraction of the longer gives a circle ``cx,cy,r`` (r the
+        radius of equal area); 0 always gives an ellipse.
+
+    Raises
+    ------
+    RoiError
+        Not 4 numbers (read as :func:`~logpolar_track.geometry.parse_numbers` reads them: plain decimals, no ``_``,
+        ``nan`` or ``inf``), or a side <= 0.
+    """
+    # Semicolons separate too (x,y;w,h), as before there was one reader of number lists.
+    values = (parse_numbers(box.replace(";", ","), "box", BOX_SYNTAX) if isinstance(box, str)
+              else [float(v) for v in box])
+    if len(values) != 4:
+        raise RoiError(f"box '{box}' has {counted(len(values), 'number')}; expected {BOX_SYNTAX}")
+    x, y, w, h = values
+    if w <= 0 or h <= 0:
+        raise RoiError(f"box '{box}': width and height must be > 0 pixels")
+    e = ellipse_in_box(x, y, w, h)
+    return _rounded(_normalised(e.cx, e.cy, e.a, e.b, e.angle_deg), round_tolerance)
+
+
+def _circle_fit(points: np.ndarray) -> tuple[float, float, float]:
+    """Least-squares circle through ``points`` (n >= 3, x/y pixels): algebraic fit of Kasa (1976)."""
+    x, y = points[:, 0], points[:, 1]
+    design = np.column_stack([x, y, np.ones_like(x)])
+    rhs = x * x + y * y
+    (p, q, c), *_ = np.linalg.lstsq(design, rhs, rcond=None)
+    cx, cy = p / 2.0, q / 2.0
+    return float(cx), float(cy), float(math.sqrt(max(c + cx * cx + cy * cy, 0.0)))
+
+
+def _residual(e: Ellipse, points: np.ndarray) -> float:
+    """Mean |(u/a)^2 + (v/b)^2 - 1| of ``points`` in the ellipse's own frame (0 on the outline)."""
+    psi = math.radians(e.angle_deg)
+    dx, dy = points[:, 0] - e.cx, -(points[:, 1] - e.cy)  # to a y-up frame: angles CCW on screen
+    u = dx * math.cos(psi) + dy * math.sin(psi)
+    v = -dx * math.sin(psi) + dy * math.cos(psi)
+    return float(np.mean(np.abs((u / e.a) ** 2 + (v / e.b) ** 2 - 1.0)))
+
+
+def roi_from_points(points, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
+    """The ROI fitted to points on the object's outline.
+
+    Parameters
+    ----------
+    points : str or array-like
+        ``"x1,y1,x2,y2,..."`` or an ``(n, 2)`` array of (x, y) pixels on the outline, spread around it (or an
+        OpenCV contour, ``(n, 1, 2)``).
+    round_tolerance : float
+        Fits whose semi-axes differ by at most this fraction of the larger are reported as a circle
+        (radius of equal area); 0 keeps the ellipse.
+
+    Returns
+    -------
+    Ellipse
+        ``a >= b``, angle of axis ``a`` in (-90, 90] degrees counter-clockwise on screen.
+
+    Raises
+    ------
+    RoiError
+        A text that is not a list of numbers (:func:`~logpolar_track.geometry.parse_numbers`), an odd count of
+        numbers, an array of another shape, a point not finite, fewer than 3 distinct points, all
+        points on a line, or no ellipse fits.
+
+    Notes
+    -----
+    Points given more than once count once. 3 or 4 points determine a circle but not an ellipse (5 parameters):
+    they give the least-squares circle through them (Kasa's algebraic fit). 5 or more give OpenCV's direct
+    least-squares ellipse fit (``cv2.fitEllipseDirect``, Fitzgibbon, Pilu and Fisher, TPAMI 1999, which always
+    returns an ellipse).
+    OpenCV reports the rotated rectangle's angle in image coordinates (y down), i.e. clockwise on screen, and
+    which side is "width" has changed between versions; the orientation is therefore taken from whichever
+    reading of ``(w, h, angle)`` fits the points best, so it comes out counter-clockwise on screen whatever
+    the version. Points covering only a short arc of the outline give an unreliable ellipse: spread them
+    around the whole object.
+    """
+    if isinstance(points, str):
+        values = parse_numbers(points.replace(";", ","), "points", POINTS_SYNTAX)  # 'x1,y1;x2,y2' too
+        if len(values) % 2:
+            raise RoiError(f"points give {len(values)} numbers; expected pairs x1,y1,x2,y2,... (pixels)")
+        given = np.asarray(values, float).reshape(-1, 2)
+    else:
+        try:
+            given = np.asarray(points, float)
+        except (TypeError, ValueError):
+            raise RoiError("points must be numbers: an (n, 2) array of (x, y) pixels") from None
+        if given.ndim == 3 and given.shape[1] == 1:  # OpenCV's contours, (n, 1, 2)
+            given = given[:, 0]
+        if given.ndim != 2 or given.shape[1] != 2:
+            # A (2, n) array (xs and ys) read as pairs gave a wrong ellipse without a word.
+            raise RoiError(f"points must be an (n, 2) array of (x, y) pixels (or OpenCV's (n, 1, 2)), got shape "
+                           f"{given.shape}")
+        if not np.isfinite(given).all():
+            raise RoiError("points must be finite numbers (pixels); some are NaN or infinite")
+    # A point given twice adds nothing to the outline: 5 points of which 3 differ determine a circle, not the
+    # arbitrary ellipse through 3 points that the ellipse fit returned.
+    pts = np.unique(given, axis=0)
+    n = len(pts)
+    if n < 3:
+        repeated = "" if n == len(given) else f" ({len(given)} given, some repeated)"
+        raise RoiError(f"{counted(n, 'distinct point')}{repeated} cannot define an outline: give at least 3 "
+                       f"points on it (3-4 fit a circle, 5 or more an ellipse)")
+    centred = pts - pts.mean(axis=0)
+    sv = np.linalg.svd(centred, compute_uv=False)
+    if sv[1] <= 1e-6 * max(sv[0], 1e-12):
+        raise RoiError("the points lie on a straight line; give points spread around the object's outline")
+    if n < 5:
+        cx, cy, r = _circle_fit(pts)
+        return Ellipse.circle(cx, cy, r)
+    (cx, cy), (w, h), theta = cv2.fitEllipseDirect(pts.astype(np.float32))
+    if not all(math.isfinite(v) for v in (cx, cy, w, h, theta)) or min(w, h) <= 0:
+        raise RoiError("no ellipse fits these points; give 5 or more points spread around the object's "
+                       "outline")
+    candidates = [Ellipse(cx, cy, sa / 2.0, sb / 2.0, sign * theta + extra)
+                  for sa, sb, extra in ((w, h, 0.0), (h, w, 90.0)) for sign in (-1.0, 1.0)]
+    best = min(candidates, key=lambda e: _residual(e, pts))
+    return _rounded(_normalised(best.cx, best.cy, best.a, best.b, best.angle_deg), round_tolerance)

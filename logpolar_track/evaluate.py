@@ -768,9 +768,9 @@ def _one_video(path: Path, header: list[str], body: list, video, only_if_several
 _NUMBER_COLUMNS = ("time_s", "cx", "cy", "a", "b", "angle_deg", "scale", "score")
 _POSITIVE_COLUMNS = ("a", "b")
 #: The columns another tool's CSV needs for ``lptrack eval`` (see :func:`read_run_csv`), and what a missing one of
-#: the others reads as: NaN for a time or rotation, 1 for a scale or score.
+#: the others reads as: NaN for a time or rotation (a scale not given is then the axes' size ratio), 1 for a score.
 OTHER_TOOLS_COLUMNS = ("frame", "cx", "cy", "a", "b", "angle_deg")
-_OTHER_TOOLS_DEFAULTS = {"time_s": "", "scale": "1", "rotation_deg": "", "score": "1"}
+_OTHER_TOOLS_DEFAULTS = {"time_s": "", "scale": "", "rotation_deg": "", "score": "1"}
 #: What another tool may write in those columns for a value it does not give: NaN.
 _NOT_GIVEN = ("", "nan", "n/a")
 
@@ -788,7 +788,8 @@ def read_run_csv(path, video=None, *, other_tools: bool = False, only_if_several
     With ``other_tools`` (what ``lptrack eval`` scores), a CSV whose header is not a run's but names at least
     :data:`OTHER_TOOLS_COLUMNS`, in any order, is read too, as another tool's track: its frames, centres, axes and
     angles are checked as above; ``time_s``, ``scale``, ``rotation_deg`` and ``score`` empty, ``nan`` or ``n/a`` are
-    NaN (and those it lacks NaN, or 1 for ``scale`` and ``score``); without a ``status`` column, or with it empty
+    NaN (and those it lacks NaN, or 1 for ``score``), and a scale not given is the size ratio ``sqrt(a*b)`` to the
+    first row's (what a run's ``scale`` is); without a ``status`` column, or with it empty
     throughout, the table's ``status`` is empty (how often the track was lost is not known). Its ``video`` column,
     if any, may be anywhere.
 
@@ -874,6 +875,11 @@ def read_run_csv(path, video=None, *, other_tools: bool = False, only_if_several
         if status is not None:
             table["status"].append(status)
     t = {c: np.asarray(v, float) for c, v in table.items() if c not in ("frame", "status")}
+    if lenient and len(t["a"]):
+        # Another tool's size is its axes: a scale of 1 for every frame it does not give would be scored as a
+        # claim that the object kept its size.
+        size = np.sqrt(t["a"] * t["b"])
+        t["scale"] = np.where(np.isnan(t["scale"]), size / size[0], t["scale"])
     return RunTable(np.asarray(table["frame"], int), t["time_s"],
                     np.column_stack([t["cx"], t["cy"], t["a"], t["b"], t["angle_deg"]]), t["scale"],
                     t["rotation_deg"], t["score"], table["status"], path.name)

@@ -305,6 +305,10 @@ def test_read_gt_csv_and_run_csv(tmp_path):
     m = score_track(gt, read_track_csv(run))
     assert m["frames_scored"] == 2 and math.isnan(m["lost_rate"]) and math.isnan(m["off_tracked_rate"])
     assert read_track_csv(run).scale.tolist() == [1.0, 1.0]
+    # Its size is its axes: a scale it does not give is the size ratio to the first row (not 1, a claim that the
+    # object kept its size), one it gives is taken as given.
+    run.write_text("frame,cx,cy,a,b,angle_deg,scale\n0,50,40,20,10,30,\n1,50,40,40,20,30,n/a\n2,50,40,40,20,30,3\n")
+    assert read_track_csv(run).scale.tolist() == [1.0, 2.0, 3.0]
     with pytest.raises(GroundTruthError, match="has the header 'angle_deg,frame,cx,cy,a,b'; expected an lptrack run "
                                                "CSV with the header frame,time_s,.*JSON lines$"):
         read_run_csv(run)
@@ -319,7 +323,7 @@ def test_read_gt_csv_and_run_csv(tmp_path):
     run.write_text("frame,cx,cy,a,b,angle_deg,time_s,scale,rotation_deg,score,status,video\n"
                    "0,50,40,20,10,30,,n/a,nan,,,clip.mp4\n")
     track = read_track_csv(run)
-    assert np.isnan([track.scale[0], track.rotation_deg[0], track.score[0]]).all() and track.status == []
+    assert np.isnan([track.rotation_deg[0], track.score[0]]).all() and track.status == [] and track.scale[0] == 1
     run.write_text("frame,cx,cy,a,b,angle_deg,status\n0,50,40,20,10,30,tracked\n1,50,40,20,10,30,\n")
     with pytest.raises(GroundTruthError, match="line 3: status '' is not one of init, tracked, lost"):
         read_track_csv(run)

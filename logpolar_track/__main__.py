@@ -23,11 +23,20 @@ def main() -> int:
         from .cli import main as cli_main
 
         return cli_main()
-    except KeyboardInterrupt:
-        if os.environ.get("LPTRACK_DEBUG"):
+    except (KeyboardInterrupt, RuntimeError) as exc:
+        # Python wraps a Ctrl-C that lands in a class's creation during an import (a dataclass field's
+        # __set_name__) in a RuntimeError: that one is a Ctrl-C too.
+        if os.environ.get("LPTRACK_DEBUG") or not _from_ctrl_c(exc):
             raise
         sys.stderr.write("lptrack: interrupted\n")
         return EXIT_INTERRUPTED
+
+
+def _from_ctrl_c(exc: BaseException | None) -> bool:
+    """Whether ``exc`` is a KeyboardInterrupt or was raised while handling one."""
+    while exc is not None and not isinstance(exc, KeyboardInterrupt):
+        exc = exc.__cause__ or exc.__context__
+    return exc is not None
 
 
 if __name__ == "__main__":

@@ -277,7 +277,19 @@ def _run_in_processes(function, items, jobs, on_progress, on_worker_death) -> It
                 receiver, sender = context.Pipe(duplex=False)
                 process = context.Process(target=_worker_main, args=(sender, function, item),
                                           name=f"lptrack-task-{index}", daemon=True)
-                process.start()
+                try:
+                    process.start()
+                except (EOFError, ConnectionError) as exc:
+                    # The forkserver that workers fork from died (killed, out of memory) while being asked for
+                    # one; multiprocessing starts a new server only on the next request, so one more try.
+                    try:
+                        process.start()
+                    except (EOFError, ConnectionError):
+                        sender.close()
+                        receiver.close()
+                        raise LptrackError(f"cannot start a worker process: multiprocessing's process server "
+                                           f"ended ({describe_exception(exc)}); what had not finished was not "
+                                           f"done") from exc
                 sender.close()  # the child holds its own end; EOF on ours then means it is gone
                 running.append(_Running(index, process, receiver))
             wait([r.connection for r in running] + [r.process.sentinel for r in running])

@@ -7,6 +7,7 @@ import csv
 import io
 import json
 import multiprocessing
+import operator
 import os
 import re
 import shutil
@@ -26,7 +27,7 @@ from logpolar_track.batch import (BatchProgress, VideoInput, VideoOutcome, annou
                                   find_videos, plan_batch, read_roi_file, run_batch)
 from logpolar_track.cli import main
 from logpolar_track.cli import run as cli_run
-from logpolar_track.errors import UsageError
+from logpolar_track.errors import LptrackError, UsageError
 from logpolar_track.executor import DASK_HINT, opencv_threads
 from logpolar_track.geometry import Ellipse
 from logpolar_track.results import COLUMNS, header_line
@@ -985,6 +986,33 @@ def test_a_worker_stopped_as_it_starts_reports_interrupted(monkeypatch):
         for signum, handler in handlers.items():  # the worker's own, set in this process
             signal.signal(signum, handler)
     assert receiver.recv() == ("error", "interrupted")
+
+
+@pytest.mark.parametrize("failures", [1, 2])
+def test_a_worker_server_that_died_is_asked_again_then_reported(monkeypatch, failures):
+    # Workers fork from multiprocessing's forkserver; killed while asked for one, it makes start() raise EOFError,
+    # which reached click as "Aborted!". A new server is made on the next request: one more try, then one
+    # error naming the cause.
+    from logpolar_track import executor
+
+    process_class = executor._context().Process
+    real_popen = process_class._Popen
+    left = {"failures": failures}
+
+    def flaky_popen(process):
+        if left["failures"]:
+            left["failures"] -= 1
+            raise EOFError
+        return real_popen(process)
+
+    monkeypatch.setattr(process_class, "_Popen", staticmethod(flaky_popen))
+    tasks = executor.run_tasks(operator.is_, ["a", "b"], jobs=2)
+    if failures == 1:
+        assert sorted((o.index, o.value, o.error) for o in tasks) == [(0, False, None), (1, False, None)]
+    else:
+        with pytest.raises(LptrackError, match="^cannot start a worker process: multiprocessing's process server "
+                                               "ended \\(EOFError\\); what had not finished was not done$"):
+            list(tasks)
 
 
 def test_killed_worker_costs_only_its_video(long_footage, tmp_path):

@@ -527,6 +527,38 @@ def test_ctrl_c_while_the_console_script_imports_is_quiet(tmp_path):
     assert proc.stderr == "lptrack: interrupted\n"
 
 
+def test_ctrl_c_wrapped_by_an_import_or_while_parsing_is_quiet(monkeypatch, capsys):
+    # Two windows before the CLI's own handling: Python 3.11 wraps a Ctrl-C that lands in a dataclass's creation
+    # during an import in a RuntimeError, and click says "Aborted!" (exit 1) for one while the arguments are parsed.
+    import logpolar_track.__main__ as console
+    import logpolar_track.cli as cli
+
+    def imported_when_interrupted(*args, **kwargs):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise RuntimeError("Error calling __set_name__ on 'Field' instance 'outcomes'") from exc
+
+    monkeypatch.delenv("LPTRACK_DEBUG", raising=False)
+    monkeypatch.setattr(cli, "main", imported_when_interrupted)
+    assert console.main() == 130
+    assert capsys.readouterr().err == "lptrack: interrupted\n"
+
+    def not_a_ctrl_c(*args, **kwargs):
+        raise RuntimeError("something else")
+
+    monkeypatch.setattr(cli, "main", not_a_ctrl_c)
+    with pytest.raises(RuntimeError, match="something else"):
+        console.main()
+
+    def interrupted(self, ctx, args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli.LptrackGroup, "parse_args", interrupted)
+    result = CliRunner().invoke(main, ["run", "clip.mp4"])
+    assert (result.exit_code, result.stderr) == (130, "lptrack: interrupted\n")
+
+
 def test_unknown_command_is_one_house_line():
     result = CliRunner().invoke(main, ["foo"])
     assert result.exit_code == 2

@@ -87,6 +87,16 @@ class LptrackGroup(click.Group):
             click.echo(f"lptrack: error: {exc}", err=True)
             ctx.exit(exc.exit_code)
 
+    def make_context(self, *args, **kwargs) -> click.Context:
+        # A Ctrl-C while the arguments are parsed, before invoke() below handles it: click would say "Aborted!".
+        try:
+            return super().make_context(*args, **kwargs)
+        except KeyboardInterrupt:
+            if os.environ.get("LPTRACK_DEBUG"):
+                raise
+            click.echo("lptrack: interrupted", err=True)
+            sys.exit(EXIT_INTERRUPTED)
+
     def resolve_command(self, ctx: click.Context, args: list[str]):
         try:
             return super().resolve_command(ctx, args)

@@ -220,6 +220,29 @@ def test_bench_json_to_stdout_is_only_json(dataset, tmp_path):
                           "(or --json -) too\n")
 
 
+def test_bench_whose_json_name_was_taken_meanwhile_keeps_its_figures(dataset, oracle, tmp_path, monkeypatch):
+    # A long run whose --json name another run wrote meanwhile lost everything (no table, no JSON): the table is on
+    # stdout and the JSON beside the other's, named in the error.
+    from logpolar_track.cli import bench as cli_bench
+
+    out = tmp_path / "b.json"
+    real_run_bench = cli_bench.run_bench
+
+    def run_bench_while_another_writes(*args, **kwargs):
+        results = real_run_bench(*args, **kwargs)
+        out.write_text("the other run's\n")
+        return results
+
+    monkeypatch.setattr(cli_bench, "run_bench", run_bench_while_another_writes)
+    res = _run("bench", "--dataset", dataset, "--trackers", oracle, "--json", out, "-q")
+    assert res.exit_code == 1
+    assert res.stderr == (f"lptrack: error: JSON output '{out}' already exists (written while this run went on); use "
+                          f"--overwrite to replace it; this run's JSON is in '{tmp_path / 'b.1.json'}'\n")
+    assert "mean (2)" in res.stdout and out.read_text() == "the other run's\n"
+    assert json.loads((tmp_path / "b.1.json").read_text())["parameters"]["trackers"] == [oracle]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.1.json", "b.json"]
+
+
 def test_run_bench_takes_a_whole_number_of_starts(dataset):
     for starts in (1.5, True, 0, 34):
         with pytest.raises(UsageError, match=f"starts must be a whole number from 1 to 33, got {starts!r}"):

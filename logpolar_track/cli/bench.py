@@ -11,7 +11,7 @@ import click
 from ..bench import (STARTS, bench_document, collect_sequences, default_dataset, eval_document, evaluate_run,
                      format_paired, format_passes, format_table, paired_differences, plot_curves, resolve_trackers,
                      run_bench, scored_video, summarise)
-from ..errors import UsageError
+from ..errors import OutputError, UsageError
 from ..executor import TRACKING_OPENCV_THREADS
 from ..outputs import check_image_suffix, check_output_path, write_text_atomic
 from ..plot import PLOT_SUFFIXES, matplotlib_hint
@@ -292,8 +292,27 @@ def _emit(table: str, doc: dict | None, json_out: str | None, overwrite: bool) -
             click.echo(table, err=True, nl=False)
             write_stdout(text)
             return
-        write_text_atomic(json_out, text, overwrite=overwrite)
+        # The table first: a long run's figures are not lost if its JSON cannot be written.
+        write_stdout(table)
+        try:
+            write_text_atomic(json_out, text, overwrite=overwrite)
+        except OutputError as exc:
+            if not Path(json_out).exists():
+                raise
+            # Another run wrote that name meanwhile (it was free when this run started): keep this run's too.
+            kept = _free_name(Path(json_out))
+            write_text_atomic(kept, text, overwrite=False)
+            raise OutputError(f"{exc}; this run's JSON is in '{kept}'") from None
+        return
     write_stdout(table)
+
+
+def _free_name(path: Path) -> Path:
+    """``path`` with ``.1``, ``.2``, ... before its suffix: the first such name that is free."""
+    n = 1
+    while (candidate := path.with_name(f"{path.stem}.{n}{path.suffix}")).exists():
+        n += 1
+    return candidate
 
 
 @main.command("eval", cls=OneLineErrors)

@@ -442,6 +442,12 @@ def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> Non
         raise OutputError(f"the output video and the output CSV are the same file '{planned[0][0]}'")
 
 
+def _first_then(first: list, rest: Iterator[tuple]) -> Iterator[tuple]:
+    """The one item of the list ``first``, taken out of it (a frame is not kept alive once used), then ``rest``."""
+    yield first.pop()
+    yield from rest
+
+
 def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRACKER, start_frame: int = 0,
               max_frames: int | None = None, video_out=None, csv_out=None, overwrite: bool = False,
               progress: ProgressLike = False, tracker_params: dict | None = None,
@@ -501,14 +507,18 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
         finish = _no_op
         frames = lost = 0
         try:
-            if csv_out is not None:
-                csv_writer = CsvWriter(csv_out, overwrite=overwrite, **(csv_options or {}))
-            if video_out is not None:
-                video_writer = VideoWriter(video_out, reader.fps, overwrite=overwrite)
-            step, finish = _progress_callback(progress, total)
-            started = time.perf_counter()
             with opencv_threads(threads):
-                for frame, result in _track(reader, ellipse, engine, max_frames):
+                started = time.perf_counter()
+                tracked = _track(reader, ellipse, engine, max_frames)
+                # The tracker starts before any output is opened: one that refuses the ROI (cv-mil on a box under
+                # 5 px) leaves nothing, not a CSV header already on stdout.
+                first = [next(tracked)]
+                if csv_out is not None:
+                    csv_writer = CsvWriter(csv_out, overwrite=overwrite, **(csv_options or {}))
+                if video_out is not None:
+                    video_writer = VideoWriter(video_out, reader.fps, overwrite=overwrite)
+                step, finish = _progress_callback(progress, total)
+                for frame, result in _first_then(first, tracked):
                     if csv_writer is not None:
                         csv_writer.write(result)
                     if video_writer is not None:

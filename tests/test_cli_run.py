@@ -233,6 +233,15 @@ def test_interrupt_exits_130_and_leaves_nothing(tiny_video, workdir, monkeypatch
     assert listing(workdir) == []  # no finished-looking file, no temporary file
 
 
+def test_a_tracker_that_refuses_the_roi_writes_nothing_not_even_a_header(tiny_video, workdir):
+    # The tracker starts before any output is opened: a reader of --csv - saw an empty but valid CSV (a header).
+    for outputs in (["--csv", "-", "--no-video"], []):
+        result = invoke(tiny_video.path, "--roi", "80,60,2", "--tracker", "cv-mil", *outputs)
+        assert (result.exit_code, result.stdout) == (2, "")
+        assert result.stderr.startswith("lptrack: error: cv-mil cannot start on a box under 5 px a side")
+        assert listing(workdir) == []
+
+
 def test_help_explains_roi_and_lists_every_tracker():
     result = CliRunner().invoke(main, ["run", "--help"])
     assert result.exit_code == 0

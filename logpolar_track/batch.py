@@ -355,6 +355,10 @@ def read_roi_file(path) -> list[RoiEntry]:
             continue
         header_allowed = False
         where = f"ROI file '{path}' line {number}"
+        if len(row) == 1 and ";" in row[0]:
+            # A spreadsheet saved as CSV where the decimal mark is a comma (most of Europe) separates by ';'.
+            raise UsageError(f"{where}: expected {expected}, got '{row[0]}': separated by ';', not commas (a "
+                             f"spreadsheet's CSV in a locale with decimal commas?); save it with commas")
         video_text = row[0].strip()
         if not video_text:
             raise UsageError(f"{where}: expected {expected}, got '{','.join(row)}'")

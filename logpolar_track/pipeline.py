@@ -147,7 +147,10 @@ def read_roi_text(path) -> str:
         raise LptrackError(f"cannot read ROI file '{path}': {exc.strerror or exc}") from None
     encoding = "utf-16" if data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE) else "utf-8-sig"
     try:
-        return data.decode(encoding)
+        text = data.decode(encoding)
+        if "\0" in text:  # UTF-16 without a byte-order mark decodes as UTF-8 with a NUL after each ASCII letter
+            raise UnicodeDecodeError(encoding, data, 0, 1, "NUL")
+        return text
     except UnicodeDecodeError:
         raise LptrackError(f"cannot read ROI file '{path}': it is not text in UTF-8 (nor UTF-16 with a byte-order "
                            f"mark); save it as UTF-8") from None

@@ -342,10 +342,13 @@ def test_roi_file_parsing(tmp_path):
                           ("a.mp4,\"1,2,3\",abc\n", ("bad.csv' line 1: the start_frame column holds 'abc'; it "
                                                      "takes a frame index >= 0")),
                           ("a.mp4,\"1,2,3\",0,fixed,x\n", "line 1: expected video,roi"),
-                          ("a.mp4,1,2,3\na.mp4,4,5,6\n", "already listed on line 1")):
+                          ("a.mp4,1,2,3\na.mp4,4,5,6\n", "already listed on line 1"),
+                          # A spreadsheet's CSV in a locale with decimal commas.
+                          ("video;roi\na.mp4;1;2;3\n", "line 1: expected video,roi[,start_frame][,tracker]")):
         (tmp_path / "bad.csv").write_text(bad)
-        with pytest.raises(UsageError, match=re.escape(fragment)):
+        with pytest.raises(UsageError, match=re.escape(fragment)) as refused:
             read_roi_file(tmp_path / "bad.csv")
+        assert ("separated by ';', not commas" in str(refused.value)) == bad.startswith("video;")
 
 
 def test_a_roi_files_numbers_are_read_by_the_rule_of_parse_roi(tmp_path):

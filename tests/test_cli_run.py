@@ -857,8 +857,11 @@ def test_roi_files_saved_as_utf16_are_read(tiny_video, workdir, encoding):
     assert read_rows(result.stdout)[0]["cx"] == "70.000"
 
 
-def test_a_roi_file_that_is_not_text_is_one_line(tiny_video, workdir):
-    tiny_video.path.with_suffix(".roi").write_bytes(b"\xc3\x28\x00\x01")
+@pytest.mark.parametrize("data", [b"\xc3\x28\x00\x01", "80,60,20\n".encode("utf-16-le")])
+def test_a_roi_file_that_is_not_text_is_one_line(tiny_video, workdir, data):
+    # UTF-16 without a byte-order mark is valid UTF-8 with NULs between the digits: it was "'8 0 ' is not a number",
+    # NULs written to the terminal.
+    tiny_video.path.with_suffix(".roi").write_bytes(data)
     result = invoke(tiny_video.path, "--no-video", "--csv", "-", "--frames", "2")
     assert result.exit_code == 1
     assert result.stderr == (f"lptrack: error: cannot read ROI file '{tiny_video.path.with_suffix('.roi')}': it is "

@@ -108,6 +108,7 @@ class VideoOutcome:
     frame)`` (:attr:`RunSummary.timestamps_from <logpolar_track.pipeline.RunSummary.timestamps_from>`), else None.
     ``roi_flat``: the ROI held a flat region on the start frame (:attr:`RunSummary.roi_flat`). ``undecodable``:
     stretches of frames that could not be decoded, ``(first frame, count)`` (:attr:`RunSummary.undecodable`).
+    ``image_gaps``: where an image sequence's numbers skip (:attr:`RunSummary.image_gaps`).
     """
 
     label: str
@@ -123,6 +124,7 @@ class VideoOutcome:
     timestamps_from: tuple[int, float, int] | None = None
     roi_flat: bool = False
     undecodable: tuple[tuple[int, int], ...] = ()
+    image_gaps: tuple[tuple[int, str, str], ...] = ()
 
 
 @dataclass
@@ -684,7 +686,7 @@ def run_job(job: VideoJob, report: Callable[[int], None] | None = None) -> Video
                         fps_assumed=summary.video_fps if summary.video_fps_guessed else None,
                         timestamps_from=(None if summary.timestamps_from is None
                                          else (summary.timestamps_from, summary.video_fps, summary.start_frame)),
-                        roi_flat=summary.roi_flat, undecodable=summary.undecodable)
+                        roi_flat=summary.roi_flat, undecodable=summary.undecodable, image_gaps=summary.image_gaps)
 
 
 def remove_temporary_outputs(job: VideoJob, pid: int) -> None:

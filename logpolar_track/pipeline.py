@@ -342,6 +342,9 @@ class RunSummary:
         Stretches of frames that could not be decoded (a file damaged there), as ``(first frame, count)``: they
         have no row, and tracking went on after them (:attr:`VideoReader.undecodable
         <logpolar_track.video.VideoReader.undecodable>`).
+    image_gaps : tuple of (int, str, str)
+        An image sequence's skipped numbers, ``(frame, image before, image after)`` (:attr:`VideoReader.image_gaps
+        <logpolar_track.video.VideoReader.image_gaps>`).
     timestamps_from : int or None
         A variable frame rate: the first frame whose ``time_s`` is the stream's timestamp rather than ``frame /
         fps`` (:meth:`~logpolar_track.video.VideoReader.time_of`); None for a constant one.
@@ -368,6 +371,7 @@ class RunSummary:
     timestamps_from: int | None = None
     roi_flat: bool = False
     undecodable: tuple[tuple[int, int], ...] = ()
+    image_gaps: tuple[tuple[int, str, str], ...] = ()
 
     @property
     def undecodable_frames(self) -> int:
@@ -557,4 +561,5 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
         video_fps=reader.fps, video_fps_guessed=reader.fps_guessed, width=reader.width, height=reader.height,
         video_out=written, fourcc=video_writer.fourcc if video_writer is not None else None,
         csv_out=None if csv_writer is None else csv_writer.target, expected_frames=announced,
-        timestamps_from=reader.timestamps_from, roi_flat=roi_flat, undecodable=tuple(reader.undecodable))
+        timestamps_from=reader.timestamps_from, roi_flat=roi_flat, undecodable=tuple(reader.undecodable),
+        image_gaps=tuple(reader.image_gaps))

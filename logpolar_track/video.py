@@ -99,6 +99,11 @@ def image_sequence_files(path) -> list[Path]:
     names are the pattern with a number in the field, written as the field writes it (``%04d``, and ``%4d`` as
     FFmpeg takes it: ``0007``, ``12345``; ``%d``: ``7``). A number missing from the run is skipped. Empty if none (or
     no folder)."""
+    return [file for _, file in _numbered_images(path)]
+
+
+def _numbered_images(path) -> list[tuple[int, Path]]:
+    """:func:`image_sequence_files` with each image's number."""
     path = Path(path)
     field = _frame_number_field(path)
     if field is None:
@@ -116,7 +121,7 @@ def image_sequence_files(path) -> list[Path]:
         # The number as the field writes it, so that '%04d' does not also take '7.png' or '00007.png'.
         if match and _frame_number_text(field, int(match.group(1))) == match.group(1) and entry.is_file():
             found.append((int(match.group(1)), folder / entry.name))
-    return [file for _, file in sorted(found)]
+    return sorted(found)
 
 
 #: Image files whose numbered runs :func:`guess_image_sequence` recognises in a folder.
@@ -220,7 +225,7 @@ def _open_capture(path: Path) -> cv2.VideoCapture:
     """OpenCV's capture for ``path``, or an :class:`_ImageSequenceCapture` for an image-sequence pattern (one
     seam, so tests can stand in for odd containers)."""
     if is_image_sequence(path):
-        return _ImageSequenceCapture(image_sequence_files(path))
+        return _ImageSequenceCapture(_numbered_images(path))
     return cv2.VideoCapture(opencv_path(path, "video"))
 
 
@@ -228,15 +233,24 @@ class _ImageSequenceCapture:
     """What :class:`VideoReader` uses of ``cv2.VideoCapture``, over the files of an image sequence: each read with
     ``cv2.imread`` as BGR ``uint8`` (grey images made BGR, 16-bit ones reduced to 8 bits, as FFmpeg decodes
     them). It reports the image count as its frame count and no frame rate. Every image must have the first
-    one's size, as a video's frames do."""
+    one's size, as a video's frames do. ``numbered``: ``(number, file)`` in number order (:func:`_numbered_images`).
+    """
 
-    def __init__(self, files: list[Path]):
-        self._files = list(files)
+    def __init__(self, numbered: list[tuple[int, Path]]):
+        self._numbers = [number for number, _ in numbered]
+        self._files = [file for _, file in numbered]
         self._next = 0
         self._size: tuple[int, int] | None = None  # (width, height) of the first image read
 
     def isOpened(self) -> bool:  # noqa: N802 - cv2.VideoCapture's name
         return bool(self._files)
+
+    def number_gaps(self) -> list[tuple[int, str, str]]:
+        """Where the image numbers skip (``img_0001.png``, ``img_0003.png``): ``(frame, image before, image after)``,
+        ``frame`` the number of the image after the gap. The frames stay the images in number order (that image
+        is frame 1), so from the first gap on, frame numbers part from the images' numbers."""
+        numbers, names = self._numbers, [file.name for file in self._files]
+        return [(k, names[k - 1], names[k]) for k in range(1, len(numbers)) if numbers[k] != numbers[k - 1] + 1]
 
     def get(self, prop: int) -> float:
         return float(len(self._files)) if prop == cv2.CAP_PROP_FRAME_COUNT else 0.0
@@ -344,6 +358,10 @@ class VideoReader:
         Stretches of frames that could not be decoded (a damaged file), as ``(first frame, count)``, once
         iteration has passed them. They keep their numbers: the frames after such a stretch are delivered with
         theirs, so an index is skipped, as a player shows the frames before and after the damage.
+    image_gaps : list of (int, str, str)
+        For an image sequence whose numbers skip (``img_0001.png``, ``img_0003.png``), where: ``(frame, image
+        before, image after)``, ``frame`` the image after's frame number (frames are the images in number order);
+        empty for a video.
     width, height : int
         Frame size in pixels, from the first decoded frame.
 
@@ -376,30 +394,37 @@ class VideoReader:
         if _fourcc(self._cap) == "ansi":  # FFmpeg renders any text file as a video of its characters
             self._cap.release()
             raise VideoError(f"cannot read '{self.path}' as a video: it is a text file")
-        # The stream's timestamps are read only where its own rate is used: --fps overrides them, and an image
-        # sequence or a container that reports no rate has none worth reading.
-        self._stamped = fps is None and not is_image_sequence(self.path)
+        # The stream's timestamps time the frames only where its own rate is used: --fps overrides them, and an
+        # image sequence or a container that reports no rate has none worth reading.
+        stream_fps = 0.0 if is_image_sequence(self.path) else float(self._cap.get(cv2.CAP_PROP_FPS) or 0.0)
+        # The container's own rate, by which the frames lost in a gap of the timestamps are counted (see
+        # _grab_next), whatever --fps says; None for an image sequence or a container that reports none.
+        self._stream_fps = stream_fps if math.isfinite(stream_fps) and stream_fps > 0 else None
+        self._stamped = fps is None and self._stream_fps is not None
         if fps is None:
-            fps = float(self._cap.get(cv2.CAP_PROP_FPS) or 0.0)
+            fps = stream_fps
         self.fps_guessed = not (math.isfinite(fps) and fps > 0)
         self.fps = FALLBACK_FPS if self.fps_guessed else float(fps)
-        self._stamped = self._stamped and not self.fps_guessed
+        self._previous_stamp: float | None = None  # the last decoded frame's stamp (seconds), see _grab_next
+        self._unplaced = 0  # failed grabs whose lost frames no gap in the stamps has shown yet
+        self._interval: float | None = None  # seconds between the last two frames decoded in a row
         self.timestamps_from: int | None = None
         self._last_time = -math.inf
         self._stamp_offset: float | None = None
         count = self._cap.get(cv2.CAP_PROP_FRAME_COUNT)
         self.frame_count = int(count) if math.isfinite(count) and count > 0 else 0
         self.undecodable: list[tuple[int, int]] = []
+        # getattr: a capture of a video, or one a test stands in, has no image numbers.
+        self.image_gaps: list[tuple[int, str, str]] = getattr(self._cap, "number_gaps", list)()
         # Skip to the start frame by decoding: exact, unlike CAP_PROP_POS_FRAMES on inter-coded streams.
         position = 0  # the number of the next frame
         while True:
-            ok, failed = self._grab_next(position)
-            if not ok:
+            number = self._grab_next(position)
+            if number is None:
                 self._cap.release()
                 if position == 0:
                     raise VideoError(f"video '{self.path}' contains no frames (empty or unreadable video)")
                 raise _past_the_end(self.start_frame, self.path, position)
-            number = position + failed
             if number >= self.start_frame:
                 break
             if self._stamped and self._stamp_offset is None:
@@ -463,22 +488,64 @@ class VideoReader:
         self._last_time = time_s
         return time_s
 
-    def _grab_next(self, number: int) -> tuple[bool, int]:
-        """Grab frame ``number``, going on past frames that fail to decode while the container announces more:
-        ``(ok, failed)``, ``failed`` the frames before the one grabbed that could not be decoded. FFmpeg's decoder
-        resumes after a damaged stretch, as players do, and each failed grab is one frame (the stamps of the frames
-        after a gap say so), so frames keep their numbers. Up to :data:`MAX_UNDECODABLE_RUN` failures in a row,
-        beyond which the video ends there (cut short)."""
+    def _grab_next(self, number: int) -> int | None:
+        """Grab the next frame that decodes, ``number`` if none was lost since the last one: its number, or None at
+        the end of the video.
+
+        FFmpeg's decoder resumes after a damaged stretch, as players do; the frames it could not decode must keep
+        their numbers. A failed grab is a packet FFmpeg refused, but it is reported when the packet is read, and
+        the frames the decoder still held (for B-frames' reordering) come out after it: H.264 with B-frames
+        reported the failures for frames 69-75 before frames 67 and 68. So a failure is not counted as a frame; it
+        says that frames are missing, and the presentation timestamps say which: the first frame after
+        failures whose stamp lies more than a frame after the previous one's is numbered by the gap, at the
+        container's rate (or a varying rate's last interval), up to a frame per failure. Without failures a gap is
+        a varying rate, not damage (a phone that skipped frames: they are not in the file), and the number goes up
+        by one; so are frames dropped without a failure (MPEG-TS damage: none is reported).
+        Without stamps (a container reporting no frame rate) each failure counts as a frame. Failures that no gap
+        follows (a file cut short in a packet, the frames held still coming out) lost no frame before the end.
+
+        Up to :data:`MAX_UNDECODABLE_RUN` failures in a row, or failures past the frames the container announces,
+        end the video there (cut short)."""
         failed = 0
         while not self._cap.grab():  # releases the GIL while FFmpeg decodes
             failed += 1
             if not (number + failed < self.frame_count and failed < MAX_UNDECODABLE_RUN):
-                return False, failed
-        return True, failed
+                return None
+        stamp = self._frame_stamp()
+        previous, self._previous_stamp = self._previous_stamp, stamp
+        self._unplaced += failed
+        if stamp is None:  # no stamps: each failure counts as a frame
+            number, self._unplaced = number + self._unplaced, 0
+            return number
+        # A frame lasts 1 / the container's rate, exact for a constant rate (stamps rounded to milliseconds, as in
+        # MKV, stay within 10 % and 1.5 ms of it); a varying one reports its average, 18.75 fps for 25 with a pause,
+        # and the interval between its last two frames counts frames better (3 lost at 25 fps, not 2).
+        lasts = 1.0 / self._stream_fps
+        if self._interval is not None and abs(self._interval - lasts) > max(0.1 * lasts, 0.0015):
+            lasts = self._interval
+        frames_apart = round((stamp - (-lasts if previous is None else previous)) / lasts)  # frame 0 is at 0
+        if self._unplaced and frames_apart > 1:
+            # At most a frame per failure: a varying rate's pause within the decoder's delay after a failure is not
+            # lost frames, and failures left over go to the next gap. Before the first frame, all of it.
+            lost = frames_apart - 1 if previous is None else min(frames_apart - 1, self._unplaced)
+            number, self._unplaced = number + lost, max(self._unplaced - lost, 0)
+        elif previous is not None and stamp > previous:
+            self._interval = stamp - previous
+        return number
+
+    def _frame_stamp(self) -> float | None:
+        """The frame just grabbed's presentation timestamp in seconds (OpenCV's ``CAP_PROP_POS_MSEC``: the stream's
+        own stamp less its start time, so 0 for frame 0 of a file whose stamps start later, in presentation order
+        with B-frames), or None for an image sequence, a container that reports no frame rate, or a stamp that
+        is not a number."""
+        if self._stream_fps is None:
+            return None
+        stamp = self._cap.get(cv2.CAP_PROP_POS_MSEC) / 1000.0
+        return stamp if math.isfinite(stamp) else None
 
     def _stamp(self) -> float | None:
-        """The last decoded frame's timestamp in seconds, if the stream's timestamps are read."""
-        return self._cap.get(cv2.CAP_PROP_POS_MSEC) / 1000.0 if self._stamped else None
+        """The last decoded frame's timestamp in seconds, if the stream's timestamps time its frames."""
+        return self._previous_stamp if self._stamped else None
 
     def __iter__(self) -> Iterator[tuple[int, float, np.ndarray]]:
         if self._iterated:
@@ -505,11 +572,11 @@ class VideoReader:
                 return
             if isinstance(item, BaseException):
                 raise VideoError(f"reading '{self.path}' failed after frame {index}: {item}") from item
-            frame, stamp, failed = item
+            frame, stamp, number = item
             del item
-            if failed:
-                self.undecodable.append((index + 1, failed))
-            index += 1 + failed
+            if number > index + 1:
+                self.undecodable.append((index + 1, number - index - 1))
+            index = number
             yield index, self.time_of(index, stamp), frame
 
     def _decode(self) -> None:
@@ -520,14 +587,13 @@ class VideoReader:
         number = self.start_frame + 1
         try:
             while self._free_slot():
-                ok, failed = self._grab_next(number)
-                if ok:
-                    ok, frame = self._cap.retrieve()
+                grabbed = self._grab_next(number)
+                ok, frame = self._cap.retrieve() if grabbed is not None else (False, None)
                 if not ok or frame is None:
                     break
-                self._queue.put((frame, self._stamp(), failed))
+                self._queue.put((frame, self._stamp(), grabbed))
                 del frame  # the queue holds it; the consumer's taking it frees the slot
-                number += failed + 1
+                number = grabbed + 1
             else:  # stopped by close(): nobody waits for the end
                 return
         except Exception as exc:  # noqa: BLE001 - handed to the consumer, which raises it as a VideoError

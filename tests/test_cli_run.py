@@ -790,6 +790,23 @@ def test_an_image_sequence_reads_its_roi_sidecar_and_goes_through_a_batch(tiny_v
     assert result.stderr.count("reports no frame rate") == 1
 
 
+def test_an_image_sequence_whose_numbers_skip_is_warned_of_once(image_sequence, workdir):
+    """bench said that image numbers skip, run did not: frames are the images in number order (README), so from a
+    missing number on, a frame's number is not its image's."""
+    for number in (3, 7, 8):
+        image_sequence.with_name(f"frame_{number:04d}.png").unlink()
+    result = invoke(image_sequence, "--roi", "80,60,20", "--no-video", "--csv", "-")
+    assert result.exit_code == 0, result.stderr
+    assert [int(r["frame"]) for r in read_rows(result.stdout)] == list(range(17))  # numbers kept as documented
+    warning = ("lptrack: warning: shots/frame_%04d.png: image numbers skip from frame_0002.png to frame_0004.png (and "
+               "1 more gap); frames are the images in number order, so frame 2 is frame_0004.png")
+    assert result.stderr.splitlines().count(warning) == 1
+    # In a batch too, once.
+    batch = invoke(image_sequence, image_sequence, "--roi", "80,60,20", "--no-video", "--out-dir", "out", "--jobs", "1")
+    assert batch.exit_code == 0, batch.stderr
+    assert batch.stderr.count("image numbers skip") == 1
+
+
 def test_a_folder_of_images_given_as_the_video_is_told_its_pattern(image_sequence, workdir):
     result = invoke(image_sequence.parent, "--roi", "80,60,20")
     assert result.exit_code == 2
@@ -981,3 +998,63 @@ def test_a_damaged_stretch_is_passed_over_and_said_which_frames_have_no_row(make
     assert lines[0] == (f"lptrack: warning: clip.mp4: {count} frames could not be decoded (the file is damaged there) "
                         f"and have no row: {first}-{first + count - 1}; tracking went on after them")
     assert len(lines) == 2 and lines[1].startswith(f"lptrack: clip.mp4: {60 - count} frames (")
+
+
+#: Test videos made by tests/data/make_counter_h264.py: 40 frames of 64x48 at 25 fps, each showing its number.
+DATA = Path(__file__).parent / "data"
+
+
+def test_a_run_over_damaged_h264_numbers_and_times_its_rows_by_their_frames(workdir):
+    """H.264 with B-frames, frames 14-18 lost (tests/data/damaged_h264.mp4). The failures FFmpeg reports before the
+    frames its decoder held come out were counted as frames: rows 10-12, 17 and 18 were frames 9-13, row 17 at 0.48 s
+    (frame 12's time), a note said the rate varied and the warning named frames 9 and 13-16."""
+    result = invoke(DATA / "damaged_h264.mp4", "--roi", "32,24,12", "--no-video", "--csv", "-")
+    assert result.exit_code == 0, result.stderr
+    rows = read_rows(result.stdout)
+    assert [int(r["frame"]) for r in rows] == [*range(14), *range(19, 40)]
+    assert all(r["time_s"] == f"{int(r['frame']) / 25:.6f}" for r in rows)
+    lines = result.stderr.splitlines()
+    assert lines[0] == ("lptrack: warning: damaged_h264.mp4: 5 frames could not be decoded (the file is damaged there) "
+                        "and have no row: 14-18; tracking went on after them")
+    assert len(lines) == 2 and "varies" not in result.stderr
+    # --fps sets the times, not the numbers (the stream's stamps, at its own rate, place the lost frames).
+    given = invoke(DATA / "damaged_h264.mp4", "--roi", "32,24,12", "--no-video", "--csv", "-", "--fps", "10", "-q")
+    assert [(r["frame"], r["time_s"]) for r in read_rows(given.stdout)][13:15] == [("13", "1.300000"),
+                                                                                   ("19", "1.900000")]
+    # From a start frame: frame 13 is frame 13 (it was refused as damaged), a lost one is refused.
+    later = invoke(DATA / "damaged_h264.mp4", "--roi", "32,24,12", "--no-video", "--csv", "-", "--start-frame", "13")
+    assert later.exit_code == 0, later.stderr
+    assert [(r["frame"], r["time_s"]) for r in read_rows(later.stdout)[:2]] == [("13", "0.520000"), ("19", "0.760000")]
+    lost = invoke(DATA / "damaged_h264.mp4", "--roi", "32,24,12", "--no-video", "--csv", "-", "--start-frame", "17")
+    assert lost.exit_code != 0 and lost.stdout == ""
+    assert "frame 17 of" in lost.stderr and "cannot be decoded (the file is damaged at frames 14-18)" in lost.stderr
+
+
+def test_frame_at_n_of_damaged_h264_is_frame_n(workdir):
+    """lptrack frame --at 10 wrote frame 9's picture, --at 17 frame 12's, and --at 13 was refused as damaged: the
+    picture written is the number's."""
+    pictures = {}
+    for n in (10, 11, 13, 20, 39):
+        result = CliRunner().invoke(main, ["frame", str(DATA / "damaged_h264.mp4"), "--at", str(n), "--grid", "0"],
+                                    catch_exceptions=False)
+        assert result.exit_code == 0, result.stderr
+        pictures[n] = cv2.imread(result.stdout.strip())
+    shown = {n: sum(1 << bit for bit in range(8)
+                    if image[bit // 4 * 16 + 4:bit // 4 * 16 + 12, bit % 4 * 16 + 4:bit % 4 * 16 + 12].mean() > 128)
+             for n, image in pictures.items()}
+    # 13 refers to lost frame 14: FFmpeg conceals it with another picture; from the key frame at 20, its own.
+    assert {n: shown[n] for n in (10, 11, 20, 39)} == {10: 10, 11: 11, 20: 20, 39: 39}
+    refused = CliRunner().invoke(main, ["frame", str(DATA / "damaged_h264.mp4"), "--at", "17"])
+    assert refused.exit_code != 0 and "damaged at frames 14-18" in refused.stderr
+
+
+def test_a_run_over_h264_cut_short_ends_with_its_last_frame(workdir):
+    """The first 70 % of the H.264 file: the packet cut in two is refused before the frames the decoder held come
+    out; the last two rows were numbered 19 and 20 (frames 18 and 19), after "1 frame could not be decoded: 18"."""
+    result = invoke(DATA / "truncated_h264.mp4", "--roi", "32,24,12", "--no-video", "--csv", "-")
+    assert result.exit_code == 0, result.stderr
+    rows = read_rows(result.stdout)
+    assert [(int(r["frame"]), r["time_s"]) for r in rows] == [(i, f"{i / 25:.6f}") for i in range(20)]
+    assert "could not be decoded" not in result.stderr
+    assert ("lptrack: warning: truncated_h264.mp4: ended after 20 of the 40 frames its container announces"
+            in result.stderr)

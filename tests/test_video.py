@@ -97,6 +97,88 @@ def test_a_start_frame_that_cannot_be_decoded_is_refused_and_the_next_one_is_exa
     assert [i for i, _, _ in items] == list(range(last + 1, 60))
 
 
+#: Test videos made by tests/data/make_counter_h264.py (FFmpeg is not needed to run the tests).
+DATA = Path(__file__).parent / "data"
+
+
+def shown_number(frame: np.ndarray) -> int:
+    """The frame number a frame of tests/data/counter_h264.mp4 shows: 8 blocks of 16x16 pixels, white for a 1 bit,
+    bit 0 top left, row by row (read at each block's centre, clear of the codec's blur at its edges)."""
+    return sum(1 << bit for bit in range(8)
+               if frame[bit // 4 * 16 + 4:bit // 4 * 16 + 12, bit % 4 * 16 + 4:bit % 4 * 16 + 12].mean() > 128)
+
+
+def test_the_counter_video_shows_each_frames_number():
+    """The undamaged H.264 file the damaged ones are cut from: each frame's pattern is its number (so that the
+    tests below, which read frames' numbers from their pictures, can fail)."""
+    with VideoReader(DATA / "counter_h264.mp4") as reader:
+        assert [(i, shown_number(frame)) for i, _, frame in reader] == [(i, i) for i in range(40)]
+
+
+def test_frames_after_damaged_h264_keep_their_numbers_and_times():
+    """H.264 with B-frames whose packets of frames 14-18 are zeroed. FFmpeg refuses each packet as it reads it,
+    before the frames its decoder still holds for reordering come out: counted as one frame each, the failures
+    numbered frames 9-13 as 10-12, 17 and 18, with frame 12's picture under number 17 and time_s 0.48 s. The gap in
+    the timestamps places the lost frames now."""
+    with VideoReader(DATA / "damaged_h264.mp4") as reader:
+        items = list(reader)
+    assert [i for i, _, _ in items] == [*range(14), *range(19, 40)]
+    assert reader.undecodable == [(14, 5)]
+    assert all(t == pytest.approx(i / 25) for i, t, _ in items)
+    assert reader.timestamps_from is None  # no gap in the times taken for a varying rate
+    # Each frame shows its own number, but for those that refer to a lost frame (12, 13: B-frames of frame 14;
+    # 19: a P-frame of 18), which FFmpeg conceals with another picture, until the key frame at 20.
+    shown = {i: shown_number(frame) for i, _, frame in items}
+    assert all(shown[i] == i for i in shown if not 12 <= i <= 19)
+
+
+def test_a_start_frame_of_damaged_h264_is_that_frame():
+    """From a start frame the same numbers: frame 20 is 20's picture, frame 13 is followed by 19, and a lost frame
+    is refused, naming the lost ones (frame 13 was refused as "damaged at frames 13-16", and frame 17 was 12's
+    picture)."""
+    damaged = DATA / "damaged_h264.mp4"
+    with VideoReader(damaged, start_frame=20) as reader:
+        items = list(reader)
+    assert [(i, shown_number(frame)) for i, _, frame in items] == [(i, i) for i in range(20, 40)]
+    assert items[0][1] == pytest.approx(20 / 25)
+    with VideoReader(damaged, start_frame=13) as reader:
+        assert [(i, round(t, 6)) for i, t, _ in reader][:2] == [(13, 0.52), (19, 0.76)]
+    with pytest.raises(VideoError, match=re.escape(f"frame 16 of '{damaged}' cannot be decoded (the file is "
+                                                   f"damaged at frames 14-18); give another frame")):
+        VideoReader(damaged, start_frame=16)
+    assert shown_number(video_module.read_frame(damaged, 11).image) == 11
+
+
+def test_frames_lost_in_a_varying_rate_are_counted_at_its_own_rate():
+    """H.264 whose frames 10-19 were left out with their stamps (a pause: its 30 frames report 18.75 fps on average,
+    25 fps elsewhere), then its frames 23-25 lost. Counted as frames, the failures came before frames 19 and 22 and
+    numbered them 20 and 24; counted at the average rate, the gap of 0.16 s would be 2 frames, not 3. The pause, a
+    varying rate, is not damage: its frames are numbered on."""
+    with VideoReader(DATA / "damaged_vfr_h264.mp4") as reader:
+        items = list(reader)
+    assert reader.fps == 18.75 and reader.frame_count == 30
+    assert [i for i, _, _ in items] == [*range(23), *range(26, 30)]
+    assert reader.undecodable == [(23, 3)]
+    times = {i: t for i, t, _ in items}
+    assert (times[9], times[10], times[22], times[26]) == pytest.approx((0.36, 0.8, 1.28, 1.44))
+    # Its frame k shows the number k, or k + 10 after the pause, but for those FFmpeg conceals (from 22: no key
+    # frame follows the damage).
+    assert [(i, shown_number(frame)) for i, _, frame in items if i < 22] == \
+        [(i, i if i < 10 else i + 10) for i in range(22)]
+
+
+def test_h264_cut_short_ends_after_its_last_frame_with_none_lost():
+    """The first 70 % of the H.264 file: the packet cut in two is refused before the frames the decoder held (18,
+    19) come out, which were numbered 19 and 20, after "1 frame could not be decoded: 18". No frame was lost
+    before the end: frames 0-19, each its own picture, and the end (20 of the 40 announced) is the video's."""
+    with VideoReader(DATA / "truncated_h264.mp4") as reader:
+        items = list(reader)
+    assert reader.frame_count == 40
+    assert [(i, shown_number(frame)) for i, _, frame in items] == [(i, i) for i in range(20)]
+    assert reader.undecodable == []
+    assert video_module.count_frames(DATA / "truncated_h264.mp4") == 20
+
+
 def test_close_early_stops_the_decoding_thread(tiny_video):
     reader = VideoReader(tiny_video.path, read_ahead=2)
     frames = iter(reader)

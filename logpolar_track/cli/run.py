@@ -392,6 +392,8 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
                    err=True)
     if summary.undecodable:
         click.echo(f"lptrack: warning: {_undecodable(label, summary.undecodable)}", err=True)
+    if summary.image_gaps:
+        click.echo(f"lptrack: warning: {_image_gaps(label, summary.image_gaps)}", err=True)
     if summary.truncated:
         reached = summary.frames + summary.undecodable_frames
         click.echo(f"lptrack: warning: {_truncation(label, reached, summary.expected_frames)}", err=True)
@@ -429,6 +431,13 @@ def _varying_rate(label: str, first: int, fps: float, start: int, video: bool) -
         return f"{label}'s frame rate varies: time_s follows its timestamps, not frame / {fps:g} fps{played}"
     return (f"{label}'s frame rate varies: time_s follows its timestamps from frame {first} on (before, frame / "
             f"{fps:g} fps was within half a frame of them){played}")
+
+
+def _image_gaps(label: str, gaps) -> str:
+    frame, before, after = gaps[0]
+    more = f" (and {counted(len(gaps) - 1, 'more gap')})" if len(gaps) > 1 else ""
+    return (f"{label}: image numbers skip from {before} to {after}{more}; frames are the images in number order, "
+            f"so frame {frame} is {after}")
 
 
 def _undecodable(label: str, stretches) -> str:
@@ -514,6 +523,8 @@ def _report(summary: BatchSummary, *, quiet: bool, video: bool) -> None:
                 click.echo(f"lptrack: warning: {_rate_assumed(outcome.label, outcome.fps_assumed, video)}", err=True)
             if outcome.undecodable:
                 click.echo(f"lptrack: warning: {_undecodable(outcome.label, outcome.undecodable)}", err=True)
+            if outcome.image_gaps:
+                click.echo(f"lptrack: warning: {_image_gaps(outcome.label, outcome.image_gaps)}", err=True)
             if outcome.truncated:
                 reached = outcome.frames + sum(count for _, count in outcome.undecodable)
                 click.echo(f"lptrack: warning: {_truncation(outcome.label, reached, outcome.expected_frames)}",

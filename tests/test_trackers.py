@@ -4,6 +4,7 @@ Conventions: centre in pixels, scale relative to frame 0, rotation in degrees co
 cumulative (unwrapped).
 """
 
+import copy
 import math
 import re
 from functools import lru_cache
@@ -132,27 +133,67 @@ def test_two_full_turns_read_720(name):
     assert results[-1][1].rotation_deg == pytest.approx(720.0, abs=1.0)
 
 
-@pytest.mark.parametrize("name", ACCURATE + ["spatial"])
+def _stranger(frames, poses, roi, seed):
+    """Frame 10 of the swapped-object scene with the object's disc replaced by an unrelated texture."""
+    return render_frame(frames[10], random_texture(90, 90, np.random.default_rng(seed)), roi,
+                        Pose(poses[9].cx, poses[9].cy, poses[9].scale, 0.0))
+
+
+@pytest.mark.parametrize("name", [n for n in ACCURATE + ["spatial"] if n not in THESIS])
 def test_lost_when_object_replaced_then_found_again(name):
+    # Default settings. The thesis trackers' default lost_threshold sits on their noise floor: see the next test.
     roi, poses, frames = sequence("circle", 0.15, scale_range=(0.9, 1.1), n=20, radius_px=10.0)
-    # The thesis trackers' default lost_threshold (0.2) sits on the noise floor: unrelated textures score
-    # 0.12-0.22 over an 11x11 window here while the object scores 0.45-0.65. Test them at 0.3.
-    tracker = create_tracker(name, **({"lost_threshold": 0.3} if name in THESIS else {}))
+    tracker = create_tracker(name)
     tracker.init(frames[0], roi)
     for f in frames[1:10]:
         ok, good = tracker.update(f)
         assert ok
-    # Replace the object's disc with an unrelated texture.
-    rng = np.random.default_rng(77)
-    stranger = render_frame(frames[10], random_texture(90, 90, rng), roi,
-                            Pose(poses[9].cx, poses[9].cy, poses[9].scale, 0.0))
-    ok, state = tracker.update(stranger)
+    ok, state = tracker.update(_stranger(frames, poses, roi, 77))
     assert not ok
     assert state.ellipse == good.ellipse and state.scale == good.scale and state.rotation_deg == good.rotation_deg
     assert 0.0 <= state.score < tracker.lost_threshold
     # It keeps searching and finds the object when it comes back.
     ok, state = tracker.update(frames[10])
     assert ok and math.hypot(state.centre[0] - poses[10].cx, state.centre[1] - poses[10].cy) < 1.0
+
+
+@pytest.mark.parametrize("name", THESIS)
+def test_thesis_trackers_default_lost_threshold_sits_on_the_noise_floor(name):
+    """Known limit, asserted rather than hidden: the thesis trackers' score (a phase-correlation peak height) of an
+    unrelated texture put in the object's place is 0.11-0.23 with the default settings, and their default
+    lost_threshold, 0.2, lies inside that range: some strangers are reported tracked. (Measured over 30 strangers
+    here: fixed 10 tracked, update 12, occlusion 1, diffdecomp 1.) No default separates them: the object scores
+    0.45 or more in this scene, but on sample_videos/ it scores down to 0.12-0.17 while half covered (occlusion) or
+    changing (appearance), and raising the threshold to 0.25-0.3 there reports lost 6.7 % -> 39-51 % of
+    appearance's frames (fixed, occlusion), halves update's success on occlusion (93 -> 35 % at 0.3) and occlusion's on
+    noise_blur (94 -> 53 %); see README. A stranger reported lost keeps the last state, and the object is found
+    again."""
+    roi, poses, frames = sequence("circle", 0.15, scale_range=(0.9, 1.1), n=20, radius_px=10.0)
+    tracker = create_tracker(name)
+    assert tracker.lost_threshold == 0.2
+    tracker.init(frames[0], roi)
+    on_object = []
+    for f in frames[1:10]:
+        ok, good = tracker.update(f)
+        assert ok
+        on_object.append(good.score)
+    scores, tracked = [], 0
+    for seed in range(30):
+        probe = copy.deepcopy(tracker)
+        ok, state = probe.update(_stranger(frames, poses, roi, seed))
+        scores.append(state.score)
+        tracked += ok
+        assert ok == (state.score >= tracker.lost_threshold)
+        if not ok:
+            assert state.ellipse == good.ellipse and state.scale == good.scale
+            ok, state = probe.update(frames[10])
+            assert ok and math.hypot(state.centre[0] - poses[10].cx, state.centre[1] - poses[10].cy) < 1.0
+    # Far below the object here (a threshold of 0.3 would separate this scene) ...
+    assert 0.1 < min(scores) and max(scores) < 0.3 and min(on_object) > 0.4
+    # ... yet the default threshold is within the strangers' range: it does not separate them.
+    assert max(scores) > tracker.lost_threshold - 0.02 and min(scores) < tracker.lost_threshold - 0.03
+    if name in ("fixed", "update"):
+        assert tracked >= 6  # a fifth or more of the strangers are reported tracked
 
 
 @pytest.mark.parametrize("name", ACCURATE + ["spatial"])
@@ -635,3 +676,44 @@ def test_init_takes_a_roi_string_or_numbers(name):
         assert state.ellipse == Ellipse.circle(80, 60, 20)
     with pytest.raises(RoiError, match="looks like an OpenCV box"):
         create_tracker(name).init(frame, (60, 40, 40, 40))
+
+
+def _turning_rim_scene(seed, n=50):
+    """A textured disc (radius 35 px) moving and turning 1.5 degrees a frame whose rim (the outer half of its radius,
+    of the same texture) turns the other way, 3 degrees a frame: the border misleads, the centre does not."""
+    rng = np.random.default_rng(seed)
+    roi = Ellipse.circle(160, 120, 35)
+    background = random_texture(240, 320, rng)
+    texture = random_texture(91, 91, rng).astype(np.float32)
+    texture = 128 + 0.5 * (texture - texture.mean())
+    ys, xs = np.mgrid[0:91, 0:91] - 45
+    rim = (np.hypot(xs, ys) > 0.5 * 35)[..., None]
+    poses = [Pose(160 - 0.6 * k, 120 + 0.18 * k, 1.0 + 0.002 * k, 1.5 * k) for k in range(n)]
+    frames = []
+    for k, pose in enumerate(poses):
+        m = cv2.getRotationMatrix2D((45, 45), -4.5 * k, 1.0)
+        turned = cv2.warpAffine(texture, m, (91, 91), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
+        drawn = np.clip(np.where(rim, turned, texture), 0, 255).astype(np.uint8)
+        frames.append(render_frame(background, drawn, roi, pose))
+    return roi, poses, frames
+
+
+def test_occlusion_weights_its_inner_template_against_a_misleading_border():
+    """Where ``occlusion`` beats ``fixed`` as designed: a border that moves otherwise than the object (a rim turning
+    the other way). Its inner template, weighted 0.7, is not misled: median scale error about half of ``fixed``'s
+    and largest rotation error about half (measured over 9 seeds: 0.33-1.2 % against 0.59-2.6 %, 0.6-1.2 against
+    1.7-2.3 degrees); with the weights swapped (inner 0.3) it gives most of that back (0.40-2.0 %, 1.2-1.8 degrees).
+    In the scenes where the border is merely covered it is no better than ``fixed`` (README)."""
+    errs = {"fixed": [], "occlusion": [], "swapped": []}
+    for seed in (0, 1):
+        roi, poses, frames = _turning_rim_scene(seed)
+        for label, name, params in (("fixed", "fixed", {}), ("occlusion", "occlusion", {}),
+                                    ("swapped", "occlusion", {"inner_weight": 0.3})):
+            centre, scale, rotation, lost = errors(track(name, roi, frames, **params), poses)
+            assert lost == 0 and np.median(centre) < 0.5
+            errs[label].append((np.median(scale), rotation.max()))
+    scale = {k: np.mean([e[0] for e in v]) for k, v in errs.items()}
+    worst_turn = {k: np.mean([e[1] for e in v]) for k, v in errs.items()}
+    assert scale["occlusion"] < 0.7 * scale["fixed"] and scale["occlusion"] < 0.85 * scale["swapped"], scale
+    assert worst_turn["occlusion"] < 0.7 * worst_turn["fixed"], worst_turn
+    assert worst_turn["occlusion"] < 0.85 * worst_turn["swapped"], worst_turn

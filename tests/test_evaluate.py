@@ -307,8 +307,9 @@ def test_read_gt_csv_and_run_csv(tmp_path):
     assert read_track_csv(run).scale.tolist() == [1.0, 1.0]
     # Its size is its axes: a scale it does not give is the size ratio to the first row (not 1, a claim that the
     # object kept its size), one it gives is taken as given.
-    run.write_text("frame,cx,cy,a,b,angle_deg,scale\n0,50,40,20,10,30,\n1,50,40,40,20,30,n/a\n2,50,40,40,20,30,3\n")
-    assert read_track_csv(run).scale.tolist() == [1.0, 2.0, 3.0]
+    sized = tmp_path / "sized.csv"
+    sized.write_text("frame,cx,cy,a,b,angle_deg,scale\n0,50,40,20,10,30,\n1,50,40,40,20,30,n/a\n2,50,40,40,20,30,3\n")
+    assert read_track_csv(sized).scale.tolist() == [1.0, 2.0, 3.0]
     with pytest.raises(GroundTruthError, match="has the header 'angle_deg,frame,cx,cy,a,b'; expected an lptrack run "
                                                "CSV with the header frame,time_s,.*JSON lines$"):
         read_run_csv(run)

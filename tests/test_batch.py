@@ -737,15 +737,21 @@ def test_scheduler_without_dask_gives_a_hint(work, monkeypatch):
     assert result.stderr == f"lptrack: error: {DASK_HINT}\n"
 
 
+def _stamp(path: Path) -> tuple[int, int]:
+    """What tells a file rewritten: its inode (outputs are renamed into place) and its modification time."""
+    status = path.stat()
+    return status.st_ino, status.st_mtime_ns
+
+
 def test_skip_existing_resumes(work):
     first = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1")
     assert first.exit_code == 0
     (work / "out/b.lptrack.csv").unlink()
-    stamp = (work / "out/a.lptrack.csv").stat().st_mtime_ns
+    stamp = _stamp(work / "out/a.lptrack.csv")
     again = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1", "--skip-existing")
     assert again.exit_code == 0
     assert "2 videos: 1 ok, 1 skipped (outputs exist), 0 failed" in again.stderr
-    assert (work / "out/a.lptrack.csv").stat().st_mtime_ns == stamp
+    assert _stamp(work / "out/a.lptrack.csv") == stamp
     assert len(csv_rows(work / "out/b.lptrack.csv")) == 24
     # Partial sets of outputs (here: a's video without its CSV, b's CSV without its video) are redone whole.
     (work / "out/a.lptrack.csv").unlink()
@@ -761,11 +767,11 @@ def test_skip_existing_redoes_the_videos_whose_roi_changed(work):
     """A ROI corrected in the sidecar (or the ROI file) since the run: that video is tracked again, the others
     are left alone."""
     assert invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1").exit_code == 0
-    stamp = (work / "out/a.lptrack.csv").stat().st_mtime_ns
+    stamp = _stamp(work / "out/a.lptrack.csv")
     (work / "footage/day1/b.roi").write_text("82,60,20\n")
     again = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1", "--skip-existing")
     assert again.exit_code == 0 and "2 videos: 1 ok, 1 skipped (outputs exist), 0 failed" in again.stderr
-    assert (work / "out/a.lptrack.csv").stat().st_mtime_ns == stamp
+    assert _stamp(work / "out/a.lptrack.csv") == stamp
     assert csv_rows(work / "out/b.lptrack.csv")[0]["cx"] == "82.000"
     (work / "rois.csv").write_text("footage/day1/a.mp4,80,60,20\nfootage/day1/b.mp4,82,61,20\n")
     from_file = invoke("--roi-file", "rois.csv", "--out-dir", "out", "--no-video", "--jobs", "1",
@@ -810,14 +816,14 @@ def test_skip_existing_skips_a_video_cut_short_whose_run_went_to_its_end(work):
 def test_skip_existing_is_refused_with_rows_on_stdout_for_one_video_too(work):
     """With one video, ``--csv - --skip-existing`` replaced the annotated video the hint said it would keep."""
     assert invoke("footage/day1/a.mp4", "--csv", "out.csv", "--frames", "3").exit_code == 0
-    stamp = (work / "a.lptrack.mp4").stat().st_mtime_ns
+    stamp = _stamp(work / "a.lptrack.mp4")
     refused = invoke("footage/day1/a.mp4", "--csv", "-", "--frames", "3")
     assert refused.exit_code == 1 and "(or --skip-existing" not in refused.stderr
     for videos in (["footage/day1/a.mp4"], ["footage/day1/a.mp4", "footage/day1/b.mp4"]):
         result = invoke(*videos, "--csv", "-", "--skip-existing")
         assert result.exit_code == 2 and result.stdout == ""
         assert result.stderr == "lptrack: error: --skip-existing needs outputs in files; it cannot apply to --csv -\n"
-    assert (work / "a.lptrack.mp4").stat().st_mtime_ns == stamp
+    assert _stamp(work / "a.lptrack.mp4") == stamp
 
 
 def test_an_empty_name_is_refused_not_read_as_the_current_folder(work):

@@ -890,13 +890,22 @@ def _children(pid: int) -> list[int]:
         return []
 
 
+def _reads_a_sample(pid: int) -> bool:
+    """Whether process ``pid`` has one of the sample videos open (a bench worker does while it reads frames)."""
+    try:
+        targets = [os.readlink(fd) for fd in Path(f"/proc/{pid}/fd").iterdir()]
+    except OSError:  # it ended, or a descriptor closed while listed
+        return False
+    return any(t.startswith(str(SAMPLES)) and t.endswith(".mp4") for t in targets)
+
+
 @pytest.mark.skipif(not Path(f"/proc/{os.getpid()}/task/{os.getpid()}/children").exists(),
                     reason="needs Linux's /proc/PID/task/PID/children")
-@pytest.mark.skipif(not (SAMPLES / "spin.gt.csv").exists(), reason="needs the checkout's sample_videos/")
 def test_ctrl_c_to_a_parallel_bench_is_one_line():
     # A terminal's Ctrl-C goes to the whole process group, workers included, while they read frames; the parent
     # then stops them too. Once the workers run, that gave "Exception ignored in: <generator ...>" tracebacks.
     # (SIGINT restored to its default in the child's Python: a background job inherits it ignored.)
+    assert (SAMPLES / "spin.gt.csv").is_file(), "sample_videos/ is missing from the checkout"
     restore_sigint = ("import runpy, signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
                       "sys.argv[0] = 'lptrack'; runpy.run_module('logpolar_track', run_name='__main__')")
     process = subprocess.Popen([sys.executable, "-c", restore_sigint, "bench", "--dataset", str(SAMPLES),
@@ -904,11 +913,11 @@ def test_ctrl_c_to_a_parallel_bench_is_one_line():
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:
         deadline = time.monotonic() + 60
-        # The workers are children of multiprocessing's fork server, a child of lptrack.
-        while sum(len(_children(c)) for c in _children(process.pid)) < 2:
-            assert process.poll() is None and time.monotonic() < deadline, "the workers never started"
+        # The workers are children of multiprocessing's fork server, a child of lptrack: wait until both read a
+        # sample video's frames (rather than for a second, which a loaded machine may not reach them in).
+        while sum(_reads_a_sample(w) for c in _children(process.pid) for w in _children(c)) < 2:
+            assert process.poll() is None and time.monotonic() < deadline, "the workers never read frames"
             time.sleep(0.02)
-        time.sleep(1.0)  # into their frame loops
         os.killpg(process.pid, signal.SIGINT)
         out, err = process.communicate(timeout=30)
     finally:

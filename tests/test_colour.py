@@ -44,7 +44,7 @@ def test_bins_cover_the_colour_cube():
     model = ColourLikelihood(bits=4)
     corners = np.array([[[0, 0, 0], [255, 255, 255], [255, 0, 0], [0, 0, 255]]], np.uint8)
     assert model.bins(corners).tolist() == [[0, 4095, 15 << 8, 15]]
-    with pytest.raises(RuntimeError):
+    with pytest.raises(RuntimeError, match=r"^fit\(\) first$"):
         model.likelihood(model.bins(corners))
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="^bits must be 1 to 8, got 0$"):
         ColourLikelihood(bits=0)

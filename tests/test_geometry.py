@@ -87,6 +87,36 @@ def test_check_roi_fits_accepts_roi_partly_over_border():
     check_roi_fits(Ellipse.circle(10, 50, 15), 100, 100)  # about 70 % inside
 
 
+def _share_inside(cx, cy, r, width, height, n=2001):
+    """Share of a circle's area within the frame (pixels' outer edges: -0.5 to width - 0.5), on a fine grid."""
+    g = np.linspace(-r, r, n)
+    x, y = np.meshgrid(cx + g, cy + g)
+    disc = (x - cx) ** 2 + (y - cy) ** 2 <= r * r
+    framed = (x >= -0.5) & (x <= width - 0.5) & (y >= -0.5) & (y <= height - 0.5)
+    return (disc & framed).sum() / disc.sum()
+
+
+def test_check_roi_fits_wants_half_the_area_inside_and_the_centre_in_the_frame():
+    """README: a ROI may hang over the border, but at least half its area lies inside and 0 <= cx, cy."""
+    near_corner = Ellipse.circle(7, 7, 20)
+    assert _share_inside(7, 7, 20, 100, 100) == pytest.approx(0.528, abs=0.005)
+    check_roi_fits(near_corner, 100, 100)  # 53 % inside: accepted
+    at_the_edge = Ellipse.circle(0, 50, 20)
+    assert _share_inside(0, 50, 20, 100, 100) == pytest.approx(0.516, abs=0.005)
+    check_roi_fits(at_the_edge, 100, 100)  # 52 % inside, centre on the first pixel: accepted
+    assert _share_inside(5, 5, 20, 100, 100) == pytest.approx(0.447, abs=0.005)
+    with pytest.raises(RoiError) as refused:
+        check_roi_fits(Ellipse.circle(5, 5, 20), 100, 100, source="a.mp4")
+    assert str(refused.value) == ("ROI 5,5,20 lies mostly outside the 100x100 frame of a.mp4 (45% inside); at least "
+                                  "50% of it must be in the frame")
+    with pytest.raises(RoiError) as refused:
+        check_roi_fits(Ellipse.circle(-0.4, 50, 20), 100, 100, source="a.mp4")
+    assert str(refused.value) == ("ROI centre (-0.4, 50) lies outside the 100x100 frame of a.mp4; give a centre "
+                                  "with 0 <= cx <= 99 and 0 <= cy <= 99")
+    with pytest.raises(RoiError, match=r"^ROI centre \(50, -0.4\) lies outside"):
+        check_roi_fits(Ellipse.circle(50, -0.4, 20), 100, 100)
+
+
 @pytest.mark.parametrize("roi, fragment", [
     (Ellipse.circle(120, 50, 10), "centre (120, 50) lies outside the 100x100 frame of a.mp4"),
     (Ellipse.circle(50, -1, 10), "lies outside"),

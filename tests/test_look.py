@@ -860,3 +860,45 @@ def test_frame_command_on_an_image_sequence_takes_its_rate_from_fps(tiny_video, 
         (True, False)
     assert one_error_line(invoke("frame", pattern, "--fps", 0), 2) == \
         "lptrack: error: the frame rate must be a positive number of frames per second, from 0.001 to 1,000,000, got 0"
+
+
+@needs_matplotlib
+def test_plot_draws_the_csvs_path_y_down_its_rotation_and_its_lost_frames(tiny_run, tmp_path, monkeypatch):
+    """What is drawn, not only that a PNG came out: the path is the CSV's (cx, cy) on a y-down axis (as on
+    screen), the rotation panel the CSV's rotation_deg (CCW, not negated), red crosses at the lost frames."""
+    from matplotlib.figure import Figure
+
+    video, run_csv, _ = tiny_run
+    rows = list(csv.DictReader(run_csv.open()))
+    lost_frames = [5, 12]
+    for k in lost_frames:
+        rows[k]["status"] = "lost"
+    marked = tmp_path / "marked.lptrack.csv"
+    with open(marked, "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    rotation = np.array([float(r["rotation_deg"]) for r in rows])
+    assert np.ptp(rotation) > 10  # a sign flip would show
+    drawn = {}
+
+    def record(figure, path, **kwargs):
+        Path(path).write_bytes(b"")
+        drawn["figure"] = figure
+
+    monkeypatch.setattr(Figure, "savefig", record)
+    result = invoke("plot", marked, "-o", tmp_path / "p.png", "--no-video")
+    assert result.exit_code == 0, result.stderr
+    axes = drawn["figure"].axes
+    (path_ax,) = [ax for ax in axes if ax.get_title() == "centre path"]
+    (rot_ax,) = [ax for ax in axes if ax.get_ylabel() == "rotation (deg CCW)"]
+    assert path_ax.yaxis_inverted() and not path_ax.xaxis_inverted()
+    lines = {line.get_label(): line for line in path_ax.lines}
+    cx, cy = (np.array([float(r[k]) for r in rows]) for k in ("cx", "cy"))
+    np.testing.assert_allclose(lines["track centre"].get_xdata(), cx)
+    np.testing.assert_allclose(lines["track centre"].get_ydata(), cy)
+    np.testing.assert_allclose(lines["lost"].get_xdata(), cx[lost_frames])
+    np.testing.assert_allclose(lines["lost"].get_ydata(), cy[lost_frames])
+    (track,) = [line for line in rot_ax.lines if line.get_label() == "track"]
+    np.testing.assert_allclose(track.get_xdata(), [float(r["time_s"]) for r in rows])
+    np.testing.assert_allclose(track.get_ydata(), rotation)

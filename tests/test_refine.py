@@ -112,8 +112,11 @@ def test_principal_components_learn_a_recurring_change(texture):
     assert mean_only.distance(blend) > 0.15
 
 
-@pytest.mark.parametrize("kwargs", [{"n_components": 16, "memory": 16}, {"refresh": 0}, {"highpass_sigma": -1}])
-def test_bad_settings_are_refused(kwargs):
+@pytest.mark.parametrize("kwargs, got", [({"n_components": 16, "memory": 16}, "16, 16, 4, 2.0"),
+                                         ({"refresh": 0}, "4, 16, 0, 2.0"), ({"highpass_sigma": -1}, "4, 16, 4, -1")])
+def test_bad_settings_are_refused(kwargs, got):
     patch = np.zeros((8, 8), np.float32)
-    with pytest.raises(UsageError):
+    with pytest.raises(UsageError) as refused:
         AppearanceSubspace(patch, np.ones_like(patch), **kwargs)
+    assert str(refused.value) == ("need 0 <= n_components < memory, refresh >= 1 and highpass_sigma >= 0, got "
+                                  + got)

@@ -243,8 +243,8 @@ def test_cli_writes_only_the_chosen_sample(tmp_path, monkeypatch):
 
 def _committed(name):
     video, gt, roi = (SAMPLE_DIR / f"{name}{ext}" for ext in (".mp4", ".gt.csv", ".roi"))
-    if not (video.exists() and gt.exists() and roi.exists()):
-        pytest.skip(f"sample_videos/{name} not present")
+    # The samples are committed: one missing from the checkout is a failure, not a skip.
+    assert video.is_file() and gt.is_file() and roi.is_file(), f"sample_videos/{name} is missing from the checkout"
     return video, gt, roi
 
 

@@ -185,8 +185,7 @@ def test_close_early_stops_the_decoding_thread(tiny_video):
     next(frames), next(frames)
     assert reader._thread is not None  # decoding ahead has started
     reader.close()
-    assert not reader._thread.is_alive()
-    assert not any(t.name.startswith("lptrack-read") and t.is_alive() for t in threading.enumerate())
+    assert not reader._thread.is_alive()  # this reader's thread: another test's may still be winding down
 
 
 def test_close_interrupted_while_waiting_still_releases_the_file(tiny_video, monkeypatch):
@@ -265,9 +264,15 @@ def test_reader_decodes_at_most_read_ahead_frames_ahead_and_keeps_none(tiny_vide
         for index, _, frame in reader:
             seen.append(weakref.ref(frame))
             del frame
-            time.sleep(0.05)  # time for the thread to decode as far ahead as it may
-            if index < 8:
-                assert len(decoded) <= index + read_ahead  # frame 0 was decoded when the reader opened
+            if 1 <= index < 8:  # frame 0 was decoded when the reader opened; the thread starts with frame 1
+                # Wait until the thread has decoded as far ahead as it may (a fixed sleep may end before, on a
+                # loaded machine, and so miss a thread that goes too far), then hold it to that.
+                deadline = time.monotonic() + 30
+                while len(decoded) < index + read_ahead and time.monotonic() < deadline:
+                    time.sleep(0.001)
+                assert len(decoded) == index + read_ahead
+            elif index == 0:
+                assert len(decoded) <= read_ahead
             gc.collect()
             assert sum(ref() is not None for ref in seen[:-1]) == 0  # none before the current one
     assert len(seen) == tiny_video.n_frames
@@ -318,7 +323,8 @@ def test_video_closed_without_frames(tmp_path):
     path = tmp_path / "noframes.avi"
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (64, 48))
     writer.release()
-    with pytest.raises(VideoError, match="no frames|cannot read"):
+    # The file opens (an AVI header) and yields no frame: that is said, not "cannot read".
+    with pytest.raises(VideoError, match=r"^video '.*noframes\.avi' contains no frames \(empty or unreadable video\)$"):
         VideoReader(path)
 
 

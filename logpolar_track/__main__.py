@@ -32,11 +32,10 @@ def main() -> int:
         return EXIT_INTERRUPTED
 
 
-def _from_ctrl_c(exc: BaseException | None) -> bool:
-    """Whether ``exc`` is a KeyboardInterrupt or was raised while handling one."""
-    while exc is not None and not isinstance(exc, KeyboardInterrupt):
-        exc = exc.__cause__ or exc.__context__
-    return exc is not None
+def _from_ctrl_c(exc: BaseException) -> bool:
+    """Whether ``exc`` is a KeyboardInterrupt, or the RuntimeError Python raises from one in a class's creation (a
+    RuntimeError raised while merely handling a Ctrl-C, a bug in clean-up, keeps its traceback)."""
+    return isinstance(exc, KeyboardInterrupt) or isinstance(exc.__cause__, KeyboardInterrupt)
 
 
 if __name__ == "__main__":

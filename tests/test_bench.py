@@ -20,7 +20,7 @@ from click.testing import CliRunner
 
 from logpolar_track.bench import (evaluate_run, format_paired, mean_over_starts, paired_differences, run_bench, run_one,
                                   start_roi)
-from logpolar_track.errors import UsageError
+from logpolar_track.errors import OutputError, UsageError
 from logpolar_track.cli import main
 from logpolar_track.datasets import discover
 from logpolar_track.geometry import Ellipse, parse_roi
@@ -220,7 +220,7 @@ def test_bench_json_to_stdout_is_only_json(dataset, tmp_path):
                           "(or --json -) too\n")
 
 
-def test_bench_whose_json_name_was_taken_meanwhile_keeps_its_figures(dataset, oracle, tmp_path, monkeypatch):
+def test_bench_keeps_its_figures_when_its_json_name_was_taken_or_stdout_fails(dataset, oracle, tmp_path, monkeypatch):
     # A long run whose --json name another run wrote meanwhile lost everything (no table, no JSON): the table is on
     # stdout and the JSON beside the other's, named in the error.
     from logpolar_track.cli import bench as cli_bench
@@ -241,6 +241,16 @@ def test_bench_whose_json_name_was_taken_meanwhile_keeps_its_figures(dataset, or
     assert "mean (2)" in res.stdout and out.read_text() == "the other run's\n"
     assert json.loads((tmp_path / "b.1.json").read_text())["parameters"]["trackers"] == [oracle]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["b.1.json", "b.json"]
+    # The JSON is written before the table: stdout failing (`> /dev/full`, a reader gone) does not lose it.
+    monkeypatch.setattr(cli_bench, "run_bench", real_run_bench)
+
+    def stdout_full(text):
+        raise OutputError("cannot write to stdout: No space left on device")
+
+    monkeypatch.setattr(cli_bench, "write_stdout", stdout_full)
+    res = _run("bench", "--dataset", dataset, "--trackers", oracle, "--json", tmp_path / "c.json", "-q")
+    assert (res.exit_code, res.stderr) == (1, "lptrack: error: cannot write to stdout: No space left on device\n")
+    assert json.loads((tmp_path / "c.json").read_text())["parameters"]["trackers"] == [oracle]
 
 
 def test_run_bench_takes_a_whole_number_of_starts(dataset):

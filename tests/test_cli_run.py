@@ -271,8 +271,8 @@ def test_interrupt_exits_130_and_leaves_nothing(tiny_video, workdir, monkeypatch
 
 def test_a_tracker_that_refuses_the_roi_writes_nothing_not_even_a_header(tiny_video, workdir):
     # The tracker starts before any output is opened: a reader of --csv - saw an empty but valid CSV (a header).
-    for outputs in (["--csv", "-", "--no-video"], []):
-        result = invoke(tiny_video.path, "--roi", "80,60,2", "--tracker", "cv-mil", *outputs)
+    for named in (["--csv", "-", "--no-video"], []):
+        result = invoke(tiny_video.path, "--roi", "80,60,2", "--tracker", "cv-mil", *named)
         assert (result.exit_code, result.stdout) == (2, "")
         assert result.stderr.startswith("lptrack: error: cv-mil cannot start on a box under 5 px a side")
         assert listing(workdir) == []
@@ -614,9 +614,16 @@ def test_ctrl_c_wrapped_by_an_import_or_while_parsing_is_quiet(monkeypatch, caps
     def not_a_ctrl_c(*args, **kwargs):
         raise RuntimeError("something else")
 
-    monkeypatch.setattr(cli, "main", not_a_ctrl_c)
-    with pytest.raises(RuntimeError, match="something else"):
-        console.main()
+    def failing_while_handling_a_ctrl_c(*args, **kwargs):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt:
+            raise RuntimeError("a bug in clean-up") from None
+
+    for failing, said in ((not_a_ctrl_c, "something else"), (failing_while_handling_a_ctrl_c, "a bug in clean-up")):
+        monkeypatch.setattr(cli, "main", failing)
+        with pytest.raises(RuntimeError, match=said):
+            console.main()
 
     def interrupted(self, ctx, args):
         raise KeyboardInterrupt

@@ -902,3 +902,18 @@ def test_plot_draws_the_csvs_path_y_down_its_rotation_and_its_lost_frames(tiny_r
     (track,) = [line for line in rot_ax.lines if line.get_label() == "track"]
     np.testing.assert_allclose(track.get_xdata(), [float(r["time_s"]) for r in rows])
     np.testing.assert_allclose(track.get_ydata(), rotation)
+
+
+def test_the_old_look_module_still_imports_its_names_with_a_warning():
+    # 0.x's logpolar_track.look held these; its jobs moved to their own modules (2026-12-07).
+    import importlib
+    import sys
+
+    from logpolar_track import contact_sheet, plot, roi_fit, video
+
+    sys.modules.pop("logpolar_track.look", None)
+    with pytest.warns(DeprecationWarning, match="logpolar_track.look is deprecated"):
+        look = importlib.import_module("logpolar_track.look")
+    assert (look.read_frame, look.roi_from_box, look.plot_track, look.write_contact_sheet) == (
+        video.read_frame, roi_fit.roi_from_box, plot.plot_track, contact_sheet.write_contact_sheet)
+

@@ -13,7 +13,7 @@ from ..bench import (STARTS, bench_document, collect_sequences, default_dataset,
                      run_bench, scored_video, summarise)
 from ..errors import OutputError, UsageError
 from ..executor import TRACKING_OPENCV_THREADS
-from ..outputs import check_image_suffix, check_output_path, write_text_atomic
+from ..outputs import check_image_suffix, check_output_path, write_text_atomic, writes_in_place
 from ..plot import PLOT_SUFFIXES, matplotlib_hint
 from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, PathParam, WholeNumber, check_jobs_or_scheduler, main,
                parse_param_options, require_stdout, write_stdout)
@@ -292,18 +292,17 @@ def _emit(table: str, doc: dict | None, json_out: str | None, overwrite: bool) -
             click.echo(table, err=True, nl=False)
             write_stdout(text)
             return
-        # The table first: a long run's figures are not lost if its JSON cannot be written.
-        write_stdout(table)
         try:
             write_text_atomic(json_out, text, overwrite=overwrite)
         except OutputError as exc:
-            if not Path(json_out).exists():
-                raise
-            # Another run wrote that name meanwhile (it was free when this run started): keep this run's too.
-            kept = _free_name(Path(json_out))
-            write_text_atomic(kept, text, overwrite=False)
-            raise OutputError(f"{exc}; this run's JSON is in '{kept}'") from None
-        return
+            path = Path(json_out)
+            if not overwrite and not writes_in_place(path) and path.exists():
+                # Another run wrote that name meanwhile (it was free when this run started): keep this run's too.
+                kept = _free_name(path)
+                write_text_atomic(kept, text, overwrite=False)
+                exc = OutputError(f"{exc}; this run's JSON is in '{kept}'")
+            write_stdout(table)  # a long run's figures are not lost with its JSON
+            raise exc from None
     write_stdout(table)
 
 

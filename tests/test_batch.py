@@ -171,6 +171,33 @@ def test_batch_progress_bar_stays_off_under_quiet(work, recorded_bars):
     assert recorded_bars == []
 
 
+def test_batch_on_a_stderr_that_is_not_a_terminal_says_each_video_as_it_settles(work):
+    # A log file or a CI job: no bar (its carriage returns), a line per video instead, skipped ones included.
+    invoke("footage/day1/a.mp4", "--out-dir", "out/day1", "--no-video")
+    result = invoke("footage", "--out-dir", "out", "--no-video", "--jobs", "1", "--skip-existing")
+    assert result.exit_code == 1
+    cut_rows = len(csv_rows(work / "out" / "day2/cut.lptrack.csv"))
+    lines = result.stderr.splitlines()
+    assert [line.split()[1] for line in lines[:5]] == ["1/5", "2/5", "3/5", "4/5", "5/5"]  # counted as they settle
+    described = sorted(re.sub(r"^lptrack: \d/5 ", "", line) for line in lines[:5])
+    assert [re.sub(r" in [0-9.]+ s$", " in T s", line) for line in described] == sorted([
+        "footage/day1/a.mp4: skipped (outputs exist)",
+        "footage/day1/b.mp4: 24 frames in T s",
+        "footage/day2/c.avi: 16 frames in T s",
+        f"footage/day2/cut.avi: {cut_rows} frames in T s",
+        "footage/day2/notes.mp4: failed: cannot read '" + str(work / "footage/day2/notes.mp4")
+        + "' as a video: OpenCV cannot decode it (not a video, a damaged or truncated file, or a format this "
+          "OpenCV build does not support)"])
+    assert lines[5].startswith("lptrack: 5 videos: 3 ok, 1 skipped (outputs exist), 1 failed;")  # then the summary
+    quiet = invoke("footage/day1", "--out-dir", "out2", "--no-video", "--jobs", "1", "-q")
+    assert quiet.exit_code == 0 and quiet.stderr == ""
+
+
+def test_a_settled_video_line_says_its_lost_frames():
+    line = cli_run._settled_line(VideoOutcome("clip.mp4", "ok", frames=148, lost=2, seconds=0.61))
+    assert line == "clip.mp4: 148 frames (2 lost) in 0.6 s"
+
+
 def test_batch_progress_totals_frames_and_estimates_unknown_counts():
     progress = BatchProgress(3, [VideoOutcome("old.mp4", "skipped", "outputs exist")])
     assert (progress.videos, progress.videos_done, progress.skipped) == (4, 1, 1)
@@ -974,7 +1001,9 @@ def test_reader_of_a_batch_stream_leaving_stops_the_batch_quietly(long_footage, 
     process.stdout.close()
     err = process.stderr.read()
     assert process.wait(timeout=60) == 141, err
-    assert err == ""
+    # stderr is not a terminal: the first video's line as it settled (before its rows were streamed), and nothing
+    # more: no second video, no summary, no message.
+    assert re.fullmatch(rf"lptrack: 1/4 {re.escape(str(long_footage / 'v0.mp4'))}: 120 frames in [0-9.]+ s\n", err), err
     assert files_under(out) == ["v0.lptrack.mp4"]
 
 

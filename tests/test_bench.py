@@ -344,6 +344,19 @@ def test_bench_from_several_starts_gives_their_mean(dataset):
     assert res.stderr.startswith("Means over 3 starts per sequence")
 
 
+def test_bench_on_a_stderr_that_is_not_a_terminal_says_each_tenth_of_its_runs(dataset, tmp_path):
+    # A log file or a CI job: a line as each tenth of the runs is done, not a bar's redraws; none under --quiet.
+    res = _run("bench", "--dataset", dataset, "--trackers", "fixed", "--starts", "13", "-j", "1",
+               "--json", tmp_path / "b.json")
+    assert res.exit_code == 0, res.stderr
+    lines = [line for line in res.stderr.splitlines() if "runs done" in line]
+    tenths = [k for k in range(1, 27) if k * 10 // 26 > (k - 1) * 10 // 26]
+    assert [line.split()[1] for line in lines] == [f"{k}/26" for k in tenths]
+    assert lines[-1] == "lptrack: 26/26 runs done (last: fixed on beta)"
+    quiet = _run("bench", "--dataset", dataset, "--trackers", "fixed", "--starts", "2", "-q", "--json", "-")
+    assert quiet.exit_code == 0 and "runs done" not in quiet.stderr
+
+
 def test_paired_differences_are_start_by_start_with_their_standard_error():
     results = [{"sequence": "a", "tracker": "x", "auc_per_start": [0.5, 0.6, 0.7, 0.6, 0.9]},
                {"sequence": "a", "tracker": "y", "auc_per_start": [0.4, 0.4, 0.4, 0.4, 0.4], "failed_starts": [4]},

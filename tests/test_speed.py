@@ -52,6 +52,8 @@ def test_speed_json_to_stdout_table_to_stderr():
     for key in ("decode_ms", "decode_encode_ms", "run_no_video_ms", "run_video_ms"):
         assert e2e[key] > 0
     assert "| fixed |" in result.stderr
+    # Each step said as it starts, on a stderr that is not a terminal too (a step takes seconds).
+    assert "lptrack: timing fixed" in result.stderr
 
 
 def test_speed_json_file(tmp_path):

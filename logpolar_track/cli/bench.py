@@ -186,17 +186,24 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
             click.echo(f"lptrack: note: {note}", err=True)
     threads = TRACKING_OPENCV_THREADS if threads is None else threads
 
-    show_progress = not quiet and sys.stderr.isatty()
+    runs_total = len(sequences) * len(names) * starts
     bar = None
-    if show_progress:
+    if not quiet and sys.stderr.isatty():
         from tqdm import tqdm
 
-        bar = tqdm(total=len(sequences) * len(names) * starts, unit="run", file=sys.stderr, leave=False)
+        bar = tqdm(total=runs_total, unit="run", file=sys.stderr, leave=False)
+    runs_done = [0]
 
     def progress(result: dict) -> None:
         if bar is not None:
             bar.set_postfix_str(f"{result['sequence']}/{result['tracker']}")
             bar.update(1)
+        elif not quiet:
+            # Not a terminal (a log, a CI job): a line at each tenth of the runs rather than a bar's redraws.
+            runs_done[0] += 1
+            if runs_done[0] * 10 // runs_total > (runs_done[0] - 1) * 10 // runs_total:
+                click.echo(f"lptrack: {runs_done[0]}/{runs_total} runs done (last: {result['tracker']} on "
+                           f"{result['sequence']})", err=True)
 
     try:
         results = run_bench(sequences, names, params={"tracker_params": tuning}, jobs=jobs, scheduler=scheduler,
@@ -260,9 +267,9 @@ def _speed(trackers: str | None, json_out: str | None, quiet: bool, overwrite: b
         raise UsageError(str(exc)) from None
     names, skipped = _runnable_trackers(trackers)
     _note_skipped(skipped, quiet)
-    show = not quiet and sys.stderr.isatty()
+    # A line per step, terminal or not: the steps take seconds each, so the lines are few.
     doc = speed_report(names, n_frames=n_frames,
-                       on_step=(lambda label: click.echo(f"lptrack: timing {label}", err=True)) if show else None)
+                       on_step=None if quiet else (lambda label: click.echo(f"lptrack: timing {label}", err=True)))
     doc["skipped_trackers"] = [{"tracker": n, "reason": why} for n, why in skipped]
     table = format_report(doc)
     _emit(table, doc, json_out, overwrite)

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import click
 
-from ..batch import (VIDEO_EXTENSIONS, BatchProgress, BatchSummary, find_videos, mirrored_output_base,
+from ..batch import (VIDEO_EXTENSIONS, BatchProgress, BatchSummary, VideoOutcome, find_videos, mirrored_output_base,
                      outputs_complete, plan_batch, read_roi_file, run_batch)
 from ..errors import OutputError, UsageError, counted
 from ..executor import default_jobs
@@ -464,17 +464,28 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
     """A batch: a progress bar of frames over all videos (with videos done and failed beside it), then the
     summary and every failure on stderr."""
     bar = None
-    if not quiet and _stderr_is_terminal():
+    terminal = _stderr_is_terminal()
+    if not quiet and terminal:
         from tqdm import tqdm
 
         # Frames, not videos: a bar of videos stands still for minutes when there are few long ones.
         bar = tqdm(total=None, unit="frame", file=sys.stderr, dynamic_ncols=True, leave=False, desc="lptrack")
     videos_shown = [-1]
+    # Elsewhere (a log file, a CI job, a cluster's job output) a bar's carriage returns make a mess: one line per
+    # video as it settles instead, so that a long batch shows how far it has got.
+    videos_settled = [0]
+    videos_total = len(plan.jobs) + len(plan.settled)
 
     def stop_if_reader_left() -> None:
         # No more work for rows no one reads: SystemExit stops the workers and removes their temporary files.
         if stream and _reader_left(sys.stdout):
             stdout_reader_left()
+
+    def on_outcome(outcome: VideoOutcome) -> None:
+        stop_if_reader_left()
+        if not quiet and not terminal:
+            videos_settled[0] += 1
+            click.echo(f"lptrack: {videos_settled[0]}/{videos_total} {_settled_line(outcome)}", err=True)
 
     def on_progress(progress: BatchProgress) -> None:
         bar.total = progress.frames_total
@@ -490,7 +501,7 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
     try:
         with stdout_errors() if stream else contextlib.nullcontext():
             summary = run_batch(plan, jobs=jobs, scheduler=scheduler, stream=sys.stdout if stream else None,
-                                data_format=data_format, on_outcome=lambda outcome: stop_if_reader_left(),
+                                data_format=data_format, on_outcome=on_outcome,
                                 on_frames=lambda frames: stop_if_reader_left(),
                                 on_progress=None if bar is None else on_progress)
         stop_if_reader_left()
@@ -501,6 +512,17 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
             bar.close()
     _report(summary, quiet=quiet, video=any(job.video_out is not None for job in plan.jobs))
     return summary
+
+
+def _settled_line(outcome: VideoOutcome) -> str:
+    """One video of a batch as it settles, for a stderr that is not a terminal: ``clip.mp4: 148 frames (2 lost)
+    in 0.6 s``; a failure's reason is said again with the batch's summary, for a reader of its last lines."""
+    if outcome.status == "skipped":
+        return f"{outcome.label}: skipped (outputs exist)"
+    if outcome.status == "failed":
+        return f"{outcome.label}: failed: {outcome.reason}"
+    lost = f" ({outcome.lost} lost)" if outcome.lost else ""
+    return f"{outcome.label}: {counted(outcome.frames, 'frame')}{lost} in {outcome.seconds:.1f} s"
 
 
 def _report(summary: BatchSummary, *, quiet: bool, video: bool) -> None:

@@ -1,9 +1,12 @@
-"""A ROI from what image tools give: an axis-aligned box, or points clicked on the object's outline.
+"""A ROI from what image tools give: an axis-aligned box, a rotated box's corners, or points clicked on the
+object's outline.
 
-Headless OpenCV has no ``selectROI``; a box (``x,y,w,h``, as image tools and OTB ground truth give it) or points on
-the outline marked in any image viewer are turned into the ellipse ``lptrack run --roi`` takes
-(:func:`roi_from_box`, :func:`roi_from_points`). Pixels with the origin at the top-left corner, x right, y down;
-angles in degrees counter-clockwise as seen on screen. Errors are :class:`~logpolar_track.errors.RoiError`.
+Headless OpenCV has no ``selectROI``; a box (``x,y,w,h``, as image tools and OTB ground truth give it), the four
+corners of a rotated box (as VOT's ground truth gives it) or points on the outline marked in any image viewer are
+turned into the ellipse ``lptrack run --roi`` takes (:func:`roi_from_box`, :func:`roi_from_quad`,
+:func:`roi_from_points`). Pixels with the origin at the top-left corner, x right, y down, 0-based (OTB's and
+UAV123's boxes are 1-based, as Matlab counts: subtract 1 from x and y, or see :func:`from_one_based`); angles in
+degrees counter-clockwise as seen on screen. Errors are :class:`~logpolar_track.errors.RoiError`.
 """
 
 from __future__ import annotations
@@ -19,8 +22,19 @@ from .geometry import Ellipse, ellipse_in_box, parse_numbers
 #: Default relative tolerance under which a fitted ellipse is reported as a circle: ``(a - b) / a``.
 ROUND_TOLERANCE = 0.02
 #: What :func:`roi_from_box` and :func:`roi_from_points` take as text, for messages.
-BOX_SYNTAX = "x,y,w,h (top-left corner and size in pixels; ';' separates too)"
+BOX_SYNTAX = "x,y,w,h (top-left corner and size in pixels; ';', tabs or spaces separate too)"
 POINTS_SYNTAX = "x1,y1,x2,y2,... (pixels on the object's outline; 'x1,y1;x2,y2;...' too)"
+QUAD_SYNTAX = ("x1,y1,x2,y2,x3,y3,x4,y4 (a rotated box's four corners in pixels, in any order; ';', tabs or spaces "
+               "separate too)")
+
+
+def _listed(text: str, what: str, syntax: str) -> list[float]:
+    """The numbers of a box's or corners' text: separated by commas or ';', or, in a line with neither, by tabs or
+    spaces (as benchmarks' ground-truth files have them: OTB's toy and crossing use tabs)."""
+    text = text.replace(";", ",")
+    if "," not in text:
+        text = ",".join(text.split())
+    return parse_numbers(text, what, syntax)
 
 
 def _rounded(roi: Ellipse, tolerance: float) -> Ellipse:
@@ -48,7 +62,8 @@ def roi_from_box(box, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
     Parameters
     ----------
     box : str or sequence of 4 numbers
-        ``"x,y,w,h"`` as image tools and OTB ground truth give it (0-based pixels).
+        ``"x,y,w,h"`` as image tools give it, in 0-based pixels (OTB's boxes are 1-based: see
+        :func:`from_one_based`).
     round_tolerance : float
         A box whose sides differ by at most this fraction of the longer gives a circle ``cx,cy,r`` (r the
         radius of equal area); 0 always gives an ellipse.
@@ -59,9 +74,7 @@ def roi_from_box(box, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
         Not 4 numbers (read as :func:`~logpolar_track.geometry.parse_numbers` reads them: plain decimals, no ``_``,
         ``nan`` or ``inf``), or a side <= 0.
     """
-    # Semicolons separate too (x,y;w,h), as before there was one reader of number lists.
-    values = (parse_numbers(box.replace(";", ","), "box", BOX_SYNTAX) if isinstance(box, str)
-              else [float(v) for v in box])
+    values = _listed(box, "box", BOX_SYNTAX) if isinstance(box, str) else [float(v) for v in box]
     if len(values) != 4:
         raise RoiError(f"box '{box}' has {counted(len(values), 'number')}; expected {BOX_SYNTAX}")
     x, y, w, h = values
@@ -69,6 +82,46 @@ def roi_from_box(box, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
         raise RoiError(f"box '{box}': width and height must be > 0 pixels")
     e = ellipse_in_box(x, y, w, h)
     return _rounded(_normalised(e.cx, e.cy, e.a, e.b, e.angle_deg), round_tolerance)
+
+
+def roi_from_quad(quad, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
+    """The ROI inscribed in a rotated box given by its four corners, as VOT's ground truth gives it.
+
+    Parameters
+    ----------
+    quad : str or sequence of 8 numbers
+        ``"x1,y1,x2,y2,x3,y3,x4,y4"``: the corners in 0-based pixels, in any order. A quadrilateral that is not
+        quite a rectangle (drawn by hand, as VOT's are) stands for the smallest rotated rectangle around it
+        (``cv2.minAreaRect``), as ``lptrack bench`` and ``eval`` read VOT's ground truth.
+    round_tolerance : float
+        As :func:`roi_from_box`.
+
+    Returns
+    -------
+    Ellipse
+        The ellipse inscribed in that rectangle, ``a >= b``, the angle of axis ``a`` in (-90, 90] degrees
+        counter-clockwise on screen.
+
+    Raises
+    ------
+    RoiError
+        Not 8 numbers, or corners that span no area (all on a line).
+    """
+    from .evaluate import rect_from_polygon  # where VOT's polygons are read for scoring: the same rectangle
+
+    values = _listed(quad, "corners", QUAD_SYNTAX) if isinstance(quad, str) else [float(v) for v in quad]
+    if len(values) != 8:
+        raise RoiError(f"corners '{quad}' give {counted(len(values), 'number')}; expected {QUAD_SYNTAX}")
+    cx, cy, w, h, angle = rect_from_polygon(values)
+    if min(w, h) <= 0:
+        raise RoiError(f"corners '{quad}' span no area (they lie on a line); expected {QUAD_SYNTAX}")
+    return _rounded(_normalised(cx, cy, w / 2.0, h / 2.0, angle), round_tolerance)
+
+
+def from_one_based(roi: Ellipse) -> Ellipse:
+    """``roi`` read from 1-based coordinates (Matlab's, OTB's and UAV123's boxes: their top-left pixel is (1, 1))
+    moved to lptrack's 0-based ones: 1 pixel left and up."""
+    return roi.moved(roi.cx - 1.0, roi.cy - 1.0)
 
 
 def _circle_fit(points: np.ndarray) -> tuple[float, float, float]:

@@ -28,12 +28,12 @@ from logpolar_track.cli import main
 from logpolar_track.contact_sheet import sheet_geometry, write_contact_sheet
 from logpolar_track.draw import GRID_COLOUR, draw_grid
 from logpolar_track.errors import RoiError, UsageError
-from logpolar_track.evaluate import GroundTruthError, read_run_csv, read_track_csv
+from logpolar_track.evaluate import GroundTruthError, read_box_text, read_run_csv, read_track_csv
 from logpolar_track.geometry import Ellipse, parse_roi
 from logpolar_track.pipeline import find_video_for_csv
 from logpolar_track.plot import PLOT_DPI, PLOT_SIZE_IN
 from logpolar_track.results import COLUMNS
-from logpolar_track.roi_fit import roi_from_box, roi_from_points
+from logpolar_track.roi_fit import from_one_based, roi_from_box, roi_from_points, roi_from_quad
 from logpolar_track.video import read_frame
 
 
@@ -251,6 +251,58 @@ def test_roi_from_box_round_trips():
         roi_from_box("1,2,0,3")
 
 
+def test_roi_from_box_reads_a_benchmark_line_separated_by_tabs_or_spaces():
+    # OTB's toy and crossing separate with tabs; a line pasted from them is the same box.
+    for text in ("60\t40\t80\t40", "60 40 80 40", " 60  40 80\t40\n", "60;40;80;40"):
+        e = roi_from_box(text)
+        assert (e.cx, e.cy, e.a, e.b, e.angle_deg) == (100, 60, 40, 20, 0), text
+    with pytest.raises(RoiError, match="'40 80' is not a number"):
+        roi_from_box("60,40 80,40")  # commas and spaces mixed: not guessed
+
+
+@pytest.mark.parametrize("angle", [0.0, 25.0, -40.0, 90.0, 120.0])
+def test_roi_from_quad_is_the_ellipse_in_a_rotated_box(angle):
+    cx, cy, w, h = 150.0, 90.0, 80.0, 30.0
+    # Corners built here: (u, v) in the box's frame, y-up, turned counter-clockwise on screen, then y flipped.
+    psi = math.radians(angle)
+    corners = []
+    for u, v in ((w / 2, h / 2), (-w / 2, h / 2), (-w / 2, -h / 2), (w / 2, -h / 2)):
+        corners.append((cx + u * math.cos(psi) - v * math.sin(psi), cy - (u * math.sin(psi) + v * math.cos(psi))))
+    for order in ((0, 1, 2, 3), (2, 3, 0, 1), (3, 2, 1, 0)):  # VOT's corner order varies
+        e = roi_from_quad(",".join(f"{c:.4f}" for i in order for c in corners[i]))
+        assert math.dist(e.centre, (cx, cy)) < 1e-3 and e.a == pytest.approx(w / 2, abs=1e-3)
+        assert e.b == pytest.approx(h / 2, abs=1e-3) and angle_diff_mod180(e.angle_deg, angle) < 1e-2
+        assert -90 < e.angle_deg <= 90
+    square = roi_from_quad([10, 10, 50, 10, 50, 50, 10, 50])
+    assert square.is_circle and (square.cx, square.cy, square.a) == (30, 30, 20)
+    with pytest.raises(RoiError, match="give 6 numbers; expected x1,y1,x2,y2,x3,y3,x4,y4"):
+        roi_from_quad("1,2,3,4,5,6")
+    with pytest.raises(RoiError, match="span no area"):
+        roi_from_quad("0,0,10,10,20,20,30,30")
+
+
+def test_roi_from_quad_is_the_start_bench_and_eval_read_from_vot_ground_truth(tmp_path):
+    line = "291.827,203.603,396.382,264.289,442.173,185.397,337.618,124.711"  # VOT bag's first line
+    gt = tmp_path / "groundtruth.txt"
+    gt.write_text(line + "\n")
+    start = read_box_text(gt).initial_roi()
+    got = roi_from_quad(line, round_tolerance=0)
+    assert math.dist(got.centre, start.centre) < 1e-3
+    assert sorted((got.a, got.b)) == pytest.approx(sorted((start.a, start.b)), abs=1e-3)
+    assert angle_diff_mod180(got.angle_deg if got.a >= got.b else got.angle_deg + 90,
+                             start.angle_deg if start.a >= start.b else start.angle_deg + 90) < 1e-2
+
+
+def test_one_based_coordinates_are_moved_a_pixel_left_and_up(tmp_path):
+    # OTB's first box of a sequence is the start bench takes (read_box_text knows OTB files are 1-based).
+    gt = tmp_path / "groundtruth_rect.txt"
+    gt.write_text("152\t102\t40\t67\n")
+    start = read_box_text(gt, one_based=True).initial_roi()
+    got = from_one_based(roi_from_box("152\t102\t40\t67"))
+    assert (got.cx, got.cy) == (start.cx, start.cy) == (171.0, 134.5)
+    assert sorted((got.a, got.b)) == sorted((start.a, start.b)) == [20.0, 33.5]
+
+
 @pytest.mark.parametrize("angle", [0.0, 30.0, -60.0, 75.0, 90.0, 135.0])
 def test_roi_from_points_on_a_known_ellipse(angle):
     cx, cy, a, b = 120.0, 90.0, 45.0, 18.0
@@ -312,6 +364,15 @@ def test_roi_command_prints_a_spec_checked_against_the_frame(tiny_video):
     assert "outside" in one_error_line(invoke("roi", tiny_video.path, "--from-box", "200,10,20,20"), 2)
     one_error_line(invoke("roi", tiny_video.path), 2)
     one_error_line(invoke("roi", tiny_video.path, "--from-box", "1,2,3,4", "--from-points", "1,2,3,4,5,6"), 2)
+    assert "exactly one of" in one_error_line(
+        invoke("roi", tiny_video.path, "--from-box", "1,2,3,4", "--from-quad", "1,2,3,4,5,6,7,8"), 2)
+    result = invoke("roi", tiny_video.path, "--from-quad", "60,40,100,40,100,80,60,80")
+    assert result.exit_code == 0 and result.stdout == "80,60,20\n"
+    result = invoke("roi", tiny_video.path, "--from-box", "61\t41\t40\t40", "--one-based")
+    assert result.exit_code == 0 and result.stdout == "80,60,20\n"
+    result = invoke("roi", tiny_video.path, "--from-quad", "61,41,101,41,101,81,61,81", "--one-based")
+    assert result.exit_code == 0 and result.stdout == "80,60,20\n"
+    assert "span no area" in one_error_line(invoke("roi", tiny_video.path, "--from-quad", "0,0,1,1,2,2,3,3"), 2)
     assert "at least 3" in one_error_line(invoke("roi", tiny_video.path, "--from-points", "1,2,3,4"), 2)
     assert "0 to 19" in one_error_line(invoke("roi", tiny_video.path, "--at", 40, "--from-box", "60,40,40,40"), 2)
 

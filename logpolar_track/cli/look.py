@@ -20,7 +20,7 @@ from ..geometry import check_roi_fits
 from ..outputs import check_image_suffix
 from ..pipeline import describe_video_search, find_video_for_csv
 from ..plot import PLOT_SUFFIXES, matplotlib_hint, plot_track
-from ..roi_fit import ROUND_TOLERANCE, roi_from_box, roi_from_points
+from ..roi_fit import ROUND_TOLERANCE, from_one_based, roi_from_box, roi_from_points, roi_from_quad
 from ..video import input_label, read_frame
 from . import FrameRate, OneLineErrors, PathParam, WholeNumber, main, parse_roi_option, require_stdout, write_stdout
 
@@ -85,10 +85,16 @@ cx,cy,r with the radius of equal area; --round-tol 0 keeps the ellipse.
 Ellipses are printed with a >= b and the angle of axis a in (-90, 90]
 degrees counter-clockwise as seen on screen.
 
+--from-quad takes a rotated box's corners (VOT's ground truth) and gives
+the ellipse inscribed in the smallest rectangle around them. --one-based
+reads coordinates that count pixels from 1 (OTB's and UAV123's boxes).
+
 \b
 Examples:
   lptrack roi clip.mp4 --from-box 280,200,80,80          # -> 320,240,40
   lptrack roi clip.mp4 --from-points 380,240,320,270,260,240,320,210,362,261
+  lptrack roi clip.mp4 --from-quad 300,250,340,210,380,250,340,290
+  lptrack roi img/0001.jpg --from-box "$(head -1 groundtruth_rect.txt)" --one-based
   lptrack run clip.mp4 --roi "$(lptrack roi clip.mp4 --from-box 280,200,120,60)"
 """)
 @click.argument("video", type=_VIDEO)
@@ -98,20 +104,34 @@ Examples:
               help="Axis-aligned box: top-left corner and size in pixels; gives the inscribed ellipse.")
 @click.option("--from-points", "points", metavar="X1,Y1,X2,Y2,...",
               help="Points on the object's outline in pixels (at least 3, spread around it).")
+@click.option("--from-quad", "quad", metavar="X1,Y1,...,X4,Y4",
+              help="A rotated box's four corners in pixels, in any order; gives the inscribed ellipse.")
+@click.option("--one-based", is_flag=True,
+              help="Coordinates count pixels from 1, as Matlab's, OTB's and UAV123's do (1 is subtracted).")
 @click.option("--round-tol", type=click.FloatRange(min=0.0, max=1.0), default=ROUND_TOLERANCE,
               show_default=True, metavar="FRACTION",
               help="Print a circle when the semi-axes differ by at most this fraction.")
-def roi(video: Path, index: int, box: str | None, points: str | None, round_tol: float) -> None:
-    """Turn a box or points on an outline into a --roi spec, printed on stdout.
+def roi(video: Path, index: int, box: str | None, points: str | None, quad: str | None, one_based: bool,
+        round_tol: float) -> None:
+    """Turn a box, a rotated box's corners or points on an outline into a
+    --roi spec, printed on stdout.
 
-    For objects marked in another tool. The ROI is checked as 'lptrack run'
-    checks it (centre in the frame, at least half of it inside, semi-axes
-    >= 2 px); a line on stderr shows how to draw it on the frame.
+    For objects marked in another tool or a benchmark's ground truth. The
+    ROI is checked as 'lptrack run' checks it (centre in the frame, at least
+    half of it inside, semi-axes >= 2 px); a line on stderr shows how to
+    draw it on the frame.
     """
-    if (box is None) == (points is None):
-        raise UsageError("give exactly one of --from-box X,Y,W,H or --from-points X1,Y1,X2,Y2,...")
-    result = roi_from_box(box, round_tolerance=round_tol) if box is not None else \
-        roi_from_points(points, round_tolerance=round_tol)
+    if sum(given is not None for given in (box, points, quad)) != 1:
+        raise UsageError("give exactly one of --from-box X,Y,W,H, --from-points X1,Y1,X2,Y2,... or --from-quad "
+                         "X1,Y1,...,X4,Y4")
+    if box is not None:
+        result = roi_from_box(box, round_tolerance=round_tol)
+    elif quad is not None:
+        result = roi_from_quad(quad, round_tolerance=round_tol)
+    else:
+        result = roi_from_points(points, round_tolerance=round_tol)
+    if one_based:
+        result = from_one_based(result)
     shot = read_frame(video, index)
     check_roi_fits(result, shot.width, shot.height, source=f"'{input_label(video)}' (frame {index})")
     spec = result.to_spec()

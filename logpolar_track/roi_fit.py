@@ -21,7 +21,7 @@ from .geometry import Ellipse, ellipse_in_box, parse_numbers
 
 #: Default relative tolerance under which a fitted ellipse is reported as a circle: ``(a - b) / a``.
 ROUND_TOLERANCE = 0.02
-#: What :func:`roi_from_box` and :func:`roi_from_points` take as text, for messages.
+#: What :func:`roi_from_box`, :func:`roi_from_points` and :func:`roi_from_quad` take as text, for messages.
 BOX_SYNTAX = "x,y,w,h (top-left corner and size in pixels; ';', tabs or spaces separate too)"
 POINTS_SYNTAX = "x1,y1,x2,y2,... (pixels on the object's outline; 'x1,y1;x2,y2;...' too)"
 QUAD_SYNTAX = ("x1,y1,x2,y2,x3,y3,x4,y4 (a rotated box's four corners in pixels, in any order; ';', tabs or spaces "
@@ -109,12 +109,20 @@ def roi_from_quad(quad, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
     """
     from .evaluate import rect_from_polygon  # where VOT's polygons are read for scoring: the same rectangle
 
-    values = _listed(quad, "corners", QUAD_SYNTAX) if isinstance(quad, str) else [float(v) for v in quad]
+    if isinstance(quad, str):
+        values = _listed(quad, "rotated box", QUAD_SYNTAX)
+    else:
+        try:
+            values = [float(v) for v in np.asarray(quad, float).ravel()]  # 8 numbers or (4, 2) corners
+        except (TypeError, ValueError):
+            raise RoiError("a rotated box's corners must be numbers: 8 of them, or a (4, 2) array") from None
+        if not all(math.isfinite(v) for v in values):
+            raise RoiError(f"rotated box {quad!r:.80}: a corner is not finite")
     if len(values) != 8:
-        raise RoiError(f"corners '{quad}' give {counted(len(values), 'number')}; expected {QUAD_SYNTAX}")
+        raise RoiError(f"rotated box '{quad}' has {counted(len(values), 'number')}; expected {QUAD_SYNTAX}")
     cx, cy, w, h, angle = rect_from_polygon(values)
     if min(w, h) <= 0:
-        raise RoiError(f"corners '{quad}' span no area (they lie on a line); expected {QUAD_SYNTAX}")
+        raise RoiError(f"rotated box '{quad}' spans no area (its corners lie on a line); expected {QUAD_SYNTAX}")
     return _rounded(_normalised(cx, cy, w / 2.0, h / 2.0, angle), round_tolerance)
 
 

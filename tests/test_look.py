@@ -275,10 +275,13 @@ def test_roi_from_quad_is_the_ellipse_in_a_rotated_box(angle):
         assert -90 < e.angle_deg <= 90
     square = roi_from_quad([10, 10, 50, 10, 50, 50, 10, 50])
     assert square.is_circle and (square.cx, square.cy, square.a) == (30, 30, 20)
-    with pytest.raises(RoiError, match="give 6 numbers; expected x1,y1,x2,y2,x3,y3,x4,y4"):
+    assert roi_from_quad(np.array([[10, 10], [50, 10], [50, 50], [10, 50]])) == square  # corners as rows too
+    with pytest.raises(RoiError, match="has 6 numbers; expected x1,y1,x2,y2,x3,y3,x4,y4"):
         roi_from_quad("1,2,3,4,5,6")
-    with pytest.raises(RoiError, match="span no area"):
+    with pytest.raises(RoiError, match="spans no area"):
         roi_from_quad("0,0,10,10,20,20,30,30")
+    with pytest.raises(RoiError, match="not finite"):
+        roi_from_quad([0, 0, 10, 0, 10, float("nan"), 0, 10])
 
 
 def test_roi_from_quad_is_the_start_bench_and_eval_read_from_vot_ground_truth(tmp_path):
@@ -372,7 +375,7 @@ def test_roi_command_prints_a_spec_checked_against_the_frame(tiny_video):
     assert result.exit_code == 0 and result.stdout == "80,60,20\n"
     result = invoke("roi", tiny_video.path, "--from-quad", "61,41,101,41,101,81,61,81", "--one-based")
     assert result.exit_code == 0 and result.stdout == "80,60,20\n"
-    assert "span no area" in one_error_line(invoke("roi", tiny_video.path, "--from-quad", "0,0,1,1,2,2,3,3"), 2)
+    assert "spans no area" in one_error_line(invoke("roi", tiny_video.path, "--from-quad", "0,0,1,1,2,2,3,3"), 2)
     assert "at least 3" in one_error_line(invoke("roi", tiny_video.path, "--from-points", "1,2,3,4"), 2)
     assert "0 to 19" in one_error_line(invoke("roi", tiny_video.path, "--at", 40, "--from-box", "60,40,40,40"), 2)
 
@@ -383,7 +386,7 @@ def test_every_list_of_numbers_refuses_what_is_no_plain_number_alike(bad):
     (a box of width 8_0 gave a circle of radius 40)."""
     rule = f"'{bad}' is not a number (give plain decimals such as 12, -3.5 or 1e3; no '_', nan or inf)"
     for read, text in ((parse_roi, f"280,200,{bad}"), (roi_from_box, f"280,200,{bad},80"),
-                       (roi_from_points, f"0,0,{bad},0,10,10")):
+                       (roi_from_points, f"0,0,{bad},0,10,10"), (roi_from_quad, f"0,0,{bad},0,10,10,0,10")):
         with pytest.raises(RoiError, match=re.escape(rule)):
             read(text)
 

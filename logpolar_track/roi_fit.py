@@ -16,7 +16,7 @@ import math
 import cv2
 import numpy as np
 
-from .errors import RoiError, counted
+from .errors import InputError, RoiError, counted
 from .geometry import Ellipse, ellipse_in_box, parse_numbers
 
 #: Default relative tolerance under which a fitted ellipse is reported as a circle: ``(a - b) / a``.
@@ -124,6 +124,77 @@ def roi_from_quad(quad, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
     if min(w, h) <= 0:
         raise RoiError(f"rotated box '{quad}' spans no area (its corners lie on a line); expected {QUAD_SYNTAX}")
     return _rounded(_normalised(cx, cy, w / 2.0, h / 2.0, angle), round_tolerance)
+
+
+def roi_from_mask(mask, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
+    """The ellipse with the same second moments as the object in a mask (scikit-image's ``regionprops`` ellipse).
+
+    Parameters
+    ----------
+    mask : array-like, shape (h, w) or (h, w, channels)
+        The object's pixels are those above half the mask's largest value, so that a 0/1 mask, a 0/255 one and one
+        saved as JPEG (its edges blurred) give the same object; of a colour mask its brightest colour channel counts
+        (a transparent PNG's alpha where its colours are all black). Of several separate regions (8-connected), the
+        largest: a segmentation's specks elsewhere would pull the ellipse towards them.
+    round_tolerance : float
+        As :func:`roi_from_box`.
+
+    Returns
+    -------
+    Ellipse
+        Centred on the region's centroid (pixel centres at whole numbers), with semi-axes twice the square roots of
+        its second moments' principal values (each pixel a unit square), so that a filled ellipse gives itself back;
+        ``a >= b``, the angle of axis ``a`` in (-90, 90] degrees counter-clockwise on screen.
+
+    Raises
+    ------
+    RoiError
+        Not a 2-D image (or one with channels), not numbers, or no pixel above 0.
+    """
+    try:
+        image = np.asarray(mask)
+        values = image.astype(np.float64)
+    except (TypeError, ValueError):
+        raise RoiError("a mask must be an image of numbers: an (h, w) or (h, w, channels) array") from None
+    if values.ndim == 3 and values.shape[2] in (1, 2, 3, 4):
+        colour = values[..., : min(values.shape[2], 3)].max(axis=2)
+        values = values[..., 3] if values.shape[2] == 4 and not colour.any() else colour
+    if values.ndim != 2 or min(values.shape) == 0:
+        raise RoiError(f"a mask must be an (h, w) or (h, w, channels) image, got shape {image.shape}")
+    values = np.nan_to_num(values, nan=0.0, posinf=0.0, neginf=0.0)
+    peak = values.max()
+    if peak <= 0:
+        raise RoiError("the mask is empty: no pixel above 0 marks the object")
+    inside = (values > peak / 2).astype(np.uint8)
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(inside, connectivity=8)
+    largest = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    ys, xs = np.nonzero(labels == largest)
+    cx, cy = float(xs.mean()), float(ys.mean())
+    # Moments of unit squares, not of their centres: 1/12 on each axis, so that small regions keep their size.
+    var_x, var_y = float(np.mean((xs - cx) ** 2)) + 1 / 12, float(np.mean((ys - cy) ** 2)) + 1 / 12
+    cov = float(np.mean((xs - cx) * (ys - cy)))
+    half_sum, half_diff = (var_x + var_y) / 2, math.hypot((var_x - var_y) / 2, cov)
+    a, b = 2 * math.sqrt(half_sum + half_diff), 2 * math.sqrt(max(half_sum - half_diff, 0.0))
+    # The major axis' direction in image coordinates turns from +x towards +y, which is down: clockwise on screen.
+    angle = -math.degrees(0.5 * math.atan2(2 * cov, var_x - var_y))
+    return _rounded(_normalised(cx, cy, a, b, angle), round_tolerance)
+
+
+def read_mask(path) -> np.ndarray:
+    """A mask image from a file as OpenCV reads it, unchanged (8 or 16 bits, grey, colour or with alpha), for
+    :func:`roi_from_mask`.
+
+    Raises
+    ------
+    InputError
+        The file is missing or not an image OpenCV reads.
+    """
+    from .video import opencv_path
+
+    image = cv2.imread(opencv_path(path, "mask", InputError), cv2.IMREAD_UNCHANGED)
+    if image is None:
+        raise InputError(f"cannot read mask '{path}' as an image (PNG, JPEG, TIFF, BMP, ...)")
+    return image
 
 
 def from_one_based(roi: Ellipse) -> Ellipse:

@@ -33,7 +33,7 @@ from logpolar_track.geometry import Ellipse, parse_roi
 from logpolar_track.pipeline import find_video_for_csv
 from logpolar_track.plot import PLOT_DPI, PLOT_SIZE_IN
 from logpolar_track.results import COLUMNS
-from logpolar_track.roi_fit import from_one_based, roi_from_box, roi_from_points, roi_from_quad
+from logpolar_track.roi_fit import from_one_based, roi_from_box, roi_from_mask, roi_from_points, roi_from_quad
 from logpolar_track.video import read_frame
 
 
@@ -294,6 +294,68 @@ def test_roi_from_quad_is_the_start_bench_and_eval_read_from_vot_ground_truth(tm
     assert sorted((got.a, got.b)) == pytest.approx(sorted((start.a, start.b)), abs=1e-3)
     assert angle_diff_mod180(got.angle_deg if got.a >= got.b else got.angle_deg + 90,
                              start.angle_deg if start.a >= start.b else start.angle_deg + 90) < 1e-2
+
+
+def _filled_ellipse(e: Ellipse, size=(240, 320), value=255) -> np.ndarray:
+    """A mask with ``e`` filled in: its outline's points (counter-clockwise angles, built by the Ellipse) as a
+    polygon, so that the mask does not depend on cv2.ellipse's angle convention."""
+    mask = np.zeros(size, np.uint8)
+    cv2.fillPoly(mask, [np.round(e.boundary_points(720) * 16).astype(np.int32)], value, shift=4)
+    return mask
+
+
+@pytest.mark.parametrize("angle", [0.0, 30.0, -60.0, 89.0, 120.0])
+def test_roi_from_mask_is_the_ellipse_with_the_masks_moments(angle):
+    e = Ellipse(160.3, 119.6, 60.0, 25.0, angle)
+    got = roi_from_mask(_filled_ellipse(e), round_tolerance=0)
+    assert math.dist(got.centre, e.centre) < 0.15  # the raster of an outline off the pixel grid
+    # A filled outline covers pixels whose centres lie on it: up to half a pixel more on each side.
+    assert -0.1 < got.a - 60 < 0.8 and -0.1 < got.b - 25 < 0.8
+    assert angle_diff_mod180(got.angle_deg, angle) < 0.2 and -90 < got.angle_deg <= 90
+
+
+def test_roi_from_mask_reads_masks_as_segmentations_give_them():
+    e = Ellipse(100.0, 80.0, 40.0, 22.0, 35.0)
+    truth = roi_from_mask(_filled_ellipse(e), round_tolerance=0)
+    same = [_filled_ellipse(e, value=1),                                                  # 0/1
+            np.dstack([np.zeros((240, 320), np.uint8), _filled_ellipse(e), np.zeros((240, 320), np.uint8)]),
+            np.dstack([np.zeros((240, 320, 3), np.uint8), _filled_ellipse(e)]),           # alpha only
+            _filled_ellipse(e).astype(np.uint16) * 257,                                   # 16 bits
+            cv2.imdecode(cv2.imencode(".jpg", _filled_ellipse(e), [cv2.IMWRITE_JPEG_QUALITY, 50])[1], 0)]
+    specked = _filled_ellipse(e)
+    specked[5:8, 300:303] = 255  # a speck far off: the largest region counts
+    for mask in [*same, specked]:
+        got = roi_from_mask(mask, round_tolerance=0)
+        assert math.dist(got.centre, truth.centre) < 0.1 and abs(got.a - truth.a) < 0.3
+        assert abs(got.b - truth.b) < 0.3 and angle_diff_mod180(got.angle_deg, truth.angle_deg) < 0.3
+    disc = roi_from_mask(_filled_ellipse(Ellipse.circle(50.0, 60.0, 12.0)))
+    assert disc.is_circle and disc.centre == pytest.approx((50, 60), abs=0.1) and 12 < disc.a < 12.8
+    with pytest.raises(RoiError, match="the mask is empty"):
+        roi_from_mask(np.zeros((20, 30)))
+    with pytest.raises(RoiError, match=r"got shape \(5,\)"):
+        roi_from_mask(np.ones(5))
+
+
+def test_roi_command_from_a_mask(tiny_video, tmp_path):
+    mask = tmp_path / "mask.png"
+    cv2.imwrite(str(mask), _filled_ellipse(Ellipse(80.0, 60.0, 30.0, 12.0, 30.0), size=(120, 160)))
+    result = invoke("roi", tiny_video.path, "--from-mask", mask)
+    assert result.exit_code == 0, result.stderr
+    got = parse_roi(result.stdout.strip())
+    assert math.dist(got.centre, (80, 60)) < 0.1 and 30 < got.a < 30.8 and 12 < got.b < 12.8
+    assert angle_diff_mod180(got.angle_deg, 30) < 0.3
+    big = tmp_path / "big.png"
+    cv2.imwrite(str(big), np.full((240, 320), 255, np.uint8))
+    assert one_error_line(invoke("roi", tiny_video.path, "--from-mask", big), 2) == (
+        f"lptrack: error: mask '{big}' is 320x240 pixels but frame 0 of 'tiny.mp4' is 160x120: give a mask of the "
+        f"frame's size")
+    not_image = tmp_path / "notes.png"
+    not_image.write_text("not an image\n")
+    assert "cannot read mask" in one_error_line(invoke("roi", tiny_video.path, "--from-mask", not_image), 1)
+    assert "not a mask" in one_error_line(invoke("roi", tiny_video.path, "--from-mask", mask, "--one-based"), 2)
+    empty = tmp_path / "empty.png"
+    cv2.imwrite(str(empty), np.zeros((120, 160), np.uint8))
+    assert "the mask is empty" in one_error_line(invoke("roi", tiny_video.path, "--from-mask", empty), 2)
 
 
 def test_one_based_coordinates_are_moved_a_pixel_left_and_up(tmp_path):

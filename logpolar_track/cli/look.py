@@ -20,7 +20,8 @@ from ..geometry import check_roi_fits
 from ..outputs import check_image_suffix
 from ..pipeline import describe_video_search, find_video_for_csv
 from ..plot import PLOT_SUFFIXES, matplotlib_hint, plot_track
-from ..roi_fit import ROUND_TOLERANCE, from_one_based, roi_from_box, roi_from_points, roi_from_quad
+from ..roi_fit import (ROUND_TOLERANCE, from_one_based, read_mask, roi_from_box, roi_from_mask, roi_from_points,
+                       roi_from_quad)
 from ..video import input_label, read_frame
 from . import FrameRate, OneLineErrors, PathParam, WholeNumber, main, parse_roi_option, require_stdout, write_stdout
 
@@ -88,6 +89,9 @@ degrees counter-clockwise as seen on screen.
 --from-quad takes a rotated box's corners (VOT's ground truth) and gives
 the ellipse inscribed in the smallest rectangle around them. --one-based
 reads coordinates that count pixels from 1 (OTB's and UAV123's boxes).
+--from-mask takes an image of the frame's size marking the object (a
+segmentation): pixels above half its brightest, the largest region, give
+the ellipse with the same second moments (scikit-image's regionprops).
 
 \b
 Examples:
@@ -95,6 +99,7 @@ Examples:
   lptrack roi clip.mp4 --from-points 380,240,320,270,260,240,320,210,362,261
   lptrack roi clip.mp4 --from-quad 300,250,340,210,380,250,340,290
   lptrack roi img/0001.jpg --from-box "$(head -1 groundtruth_rect.txt)" --one-based
+  lptrack roi clip.mp4 --at 120 --from-mask object_mask.png
   lptrack run clip.mp4 --roi "$(lptrack roi clip.mp4 --from-box 280,200,120,60)"
 """)
 @click.argument("video", type=_VIDEO)
@@ -106,33 +111,43 @@ Examples:
               help="Points on the object's outline in pixels (at least 3, spread around it).")
 @click.option("--from-quad", "quad", metavar="X1,Y1,...,X4,Y4",
               help="A rotated box's four corners in pixels, in any order; gives the inscribed ellipse.")
+@click.option("--from-mask", "mask_path", type=PathParam(exists=True, dir_okay=False, path_type=Path), metavar="IMAGE",
+              help="An image of the frame's size marking the object (non-black); gives the ellipse of equal moments.")
 @click.option("--one-based", is_flag=True,
               help="Coordinates count pixels from 1, as Matlab's, OTB's and UAV123's do (1 is subtracted).")
 @click.option("--round-tol", type=click.FloatRange(min=0.0, max=1.0), default=ROUND_TOLERANCE,
               show_default=True, metavar="FRACTION",
               help="Print a circle when the semi-axes differ by at most this fraction.")
-def roi(video: Path, index: int, box: str | None, points: str | None, quad: str | None, one_based: bool,
-        round_tol: float) -> None:
-    """Turn a box, a rotated box's corners or points on an outline into a
-    --roi spec, printed on stdout.
+def roi(video: Path, index: int, box: str | None, points: str | None, quad: str | None, mask_path: Path | None,
+        one_based: bool, round_tol: float) -> None:
+    """Turn a box, a rotated box's corners, points on an outline or a mask
+    into a --roi spec, printed on stdout.
 
     For objects marked in another tool or a benchmark's ground truth. The
     ROI is checked as 'lptrack run' checks it (centre in the frame, at least
     half of it inside, semi-axes >= 2 px); a line on stderr shows how to
     draw it on the frame.
     """
-    if sum(given is not None for given in (box, points, quad)) != 1:
-        raise UsageError("give exactly one of --from-box X,Y,W,H, --from-points X1,Y1,X2,Y2,... or --from-quad "
-                         "X1,Y1,...,X4,Y4")
+    if sum(given is not None for given in (box, points, quad, mask_path)) != 1:
+        raise UsageError("give exactly one of --from-box X,Y,W,H, --from-points X1,Y1,X2,Y2,..., --from-quad "
+                         "X1,Y1,...,X4,Y4 or --from-mask IMAGE")
+    if one_based and mask_path is not None:
+        raise UsageError("--one-based is for coordinates (--from-box, --from-points, --from-quad), not a mask")
+    mask = None if mask_path is None else read_mask(mask_path)
     if box is not None:
         result = roi_from_box(box, round_tolerance=round_tol)
     elif quad is not None:
         result = roi_from_quad(quad, round_tolerance=round_tol)
-    else:
+    elif points is not None:
         result = roi_from_points(points, round_tolerance=round_tol)
+    else:
+        result = roi_from_mask(mask, round_tolerance=round_tol)
     if one_based:
         result = from_one_based(result)
     shot = read_frame(video, index)
+    if mask is not None and mask.shape[:2] != (shot.height, shot.width):
+        raise UsageError(f"mask '{mask_path}' is {mask.shape[1]}x{mask.shape[0]} pixels but frame {index} of "
+                         f"'{input_label(video)}' is {shot.width}x{shot.height}: give a mask of the frame's size")
     check_roi_fits(result, shot.width, shot.height, source=f"'{input_label(video)}' (frame {index})")
     spec = result.to_spec()
     write_stdout(spec + "\n")

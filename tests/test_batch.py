@@ -193,6 +193,16 @@ def test_batch_on_a_stderr_that_is_not_a_terminal_says_each_video_as_it_settles(
     assert quiet.exit_code == 0 and quiet.stderr == ""
 
 
+def test_a_long_batch_logs_its_frames_where_stderr_is_not_a_terminal(work, monkeypatch):
+    monkeypatch.setattr(cli_run, "_LOG_PROGRESS_SECONDS", 0.0)  # a line at every report, as after each 30 s
+    result = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1")
+    assert result.exit_code == 0, result.stderr
+    lines = [line for line in result.stderr.splitlines() if line.startswith("lptrack: 2 videos: ") and " of " in line]
+    done = [int(line.split()[3]) for line in lines]
+    assert done == sorted(done) and done[-1] == 44 and len(done) > 2
+    assert re.fullmatch(r"lptrack: 2 videos: 44 of 44 frames \(100 %\), [0-9]+ frames/s", lines[-1]), lines[-1]
+
+
 def test_a_settled_video_line_says_its_lost_frames():
     line = cli_run._settled_line(VideoOutcome("clip.mp4", "ok", frames=148, lost=2, seconds=0.61))
     assert line == "clip.mp4: 148 frames (2 lost) in 0.6 s"

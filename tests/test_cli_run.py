@@ -10,6 +10,7 @@ import csv
 import io
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -560,6 +561,22 @@ def test_console_script_csv_dash_is_clean(tiny_video, workdir):
     assert all(len(row) == len(COLUMNS) for row in csv.reader(lines))
     assert "frames" in proc.stderr and "Traceback" not in proc.stderr
     assert listing(workdir) == []
+
+
+def test_a_long_run_logs_its_progress_where_stderr_is_not_a_terminal(tiny_video, workdir, monkeypatch):
+    # A log or a CI job gets a line every _LOG_PROGRESS_SECONDS, not a bar's redraws; a run shorter than that, none.
+    from logpolar_track.cli import run as cli_run
+
+    result = invoke(str(tiny_video.path), "--no-video")
+    assert result.exit_code == 0 and "frames/s, " not in result.stderr and " of 20 frames" not in result.stderr
+    monkeypatch.setattr(cli_run, "_LOG_PROGRESS_SECONDS", 0.0)
+    result = invoke(str(tiny_video.path), "--no-video", "--overwrite")
+    assert result.exit_code == 0, result.stderr
+    lines = [line for line in result.stderr.splitlines() if " of 20 frames" in line]
+    assert [line.split(": ")[2].split(" of")[0] for line in lines] == [str(k) for k in range(1, 21)]
+    assert re.fullmatch(r"lptrack: tiny\.mp4: 20 of 20 frames \(100 %\), [0-9]+ frames/s", lines[-1]), lines[-1]
+    quiet = invoke(str(tiny_video.path), "--no-video", "--overwrite", "-q")
+    assert quiet.exit_code == 0 and quiet.stderr == ""
 
 
 def test_a_run_with_stderr_closed_does_its_work_in_silence(tiny_video, workdir):

@@ -11,6 +11,7 @@ import contextlib
 import select
 import sys
 import textwrap
+import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -372,7 +373,8 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
         summary = run_video(video, roi, tracker=tracker, start_frame=start_frame, max_frames=max_frames,
                             video_out=None if no_video else video_out, csv_out=csv_out,
                             overwrite=overwrite or skip_existing,
-                            progress=show and sys.stderr.isatty(), csv_options={"data_format": data_format},
+                            progress=(_stderr_is_terminal() or _LogProgress(label)) if show else False,
+                            csv_options={"data_format": data_format},
                             tracker_params=tuning, fps=fps)
     except BrokenPipeError:
         stdout_reader_left()
@@ -475,6 +477,7 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
     # video as it settles instead, so that a long batch shows how far it has got.
     videos_settled = [0]
     videos_total = len(plan.jobs) + len(plan.settled)
+    log_progress = None if quiet or terminal else _LogProgress(f"{videos_total} videos")
 
     def stop_if_reader_left() -> None:
         # No more work for rows no one reads: SystemExit stops the workers and removes their temporary files.
@@ -503,7 +506,9 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
             summary = run_batch(plan, jobs=jobs, scheduler=scheduler, stream=sys.stdout if stream else None,
                                 data_format=data_format, on_outcome=on_outcome,
                                 on_frames=lambda frames: stop_if_reader_left(),
-                                on_progress=None if bar is None else on_progress)
+                                on_progress=on_progress if bar is not None else (
+                                    None if log_progress is None else
+                                    lambda progress: log_progress(progress.frames_done, progress.frames_total)))
         stop_if_reader_left()
     except BrokenPipeError:
         stdout_reader_left()
@@ -512,6 +517,29 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
             bar.close()
     _report(summary, quiet=quiet, video=any(job.video_out is not None for job in plan.jobs))
     return summary
+
+
+#: Seconds between the progress lines of a run whose stderr is not a terminal (see :class:`_LogProgress`).
+_LOG_PROGRESS_SECONDS = 30.0
+
+
+class _LogProgress:
+    """Progress for a stderr that is not a terminal (a log, a CI job): a line every :data:`_LOG_PROGRESS_SECONDS`
+    of a long run, ``lptrack: clip.mp4: 9000 of 90000 frames (10 %), 812 frames/s``, where a bar's redraws would
+    fill the log; a run shorter than that says nothing more than its summary."""
+
+    def __init__(self, label: str) -> None:
+        self.label = label
+        self.started = self.shown = time.monotonic()
+
+    def __call__(self, done: int, total: int | None) -> None:
+        now = time.monotonic()
+        if now - self.shown < _LOG_PROGRESS_SECONDS:
+            return
+        self.shown = now
+        of, share = (f" of {total}", f" ({100.0 * done / total:.0f} %)") if total else ("", "")
+        rate = done / max(now - self.started, 1e-9)
+        click.echo(f"lptrack: {self.label}: {done}{of} frames{share}, {rate:.0f} frames/s", err=True)
 
 
 def _settled_line(outcome: VideoOutcome) -> str:

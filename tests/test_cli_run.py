@@ -563,6 +563,28 @@ def test_console_script_csv_dash_is_clean(tiny_video, workdir):
     assert listing(workdir) == []
 
 
+def test_start_time_starts_at_the_frame_shown_then(tiny_video, workdir):
+    # 30 fps: 0.2 s is frame 6; the same CSV as --start-frame 6, and the frame 'lptrack frame --time' shows.
+    by_frame = invoke(str(tiny_video.path), "--start-frame", "6", "--no-video", "--csv", "-")
+    for time_text in ("0.2", "0:00.2", "00:00:00.200"):
+        result = invoke(str(tiny_video.path), "--start-time", time_text, "--no-video", "--csv", "-")
+        assert result.exit_code == 0, result.stderr
+        assert result.stdout == by_frame.stdout and result.stdout.splitlines()[1].startswith("6,0.200000,")
+        assert "lptrack: note: 0.2 s is frame 6 of tiny.mp4 (at 0.200 s); tracking starts there" in result.stderr
+    late = invoke(str(tiny_video.path), "--start-time", "5", "--no-video")
+    assert late.exit_code == 2 and "lptrack: error: time 5 s lies past the end of" in late.stderr
+    assert "give a time before 0.667 s or a frame from 0 to 19" in late.stderr
+    both = invoke(str(tiny_video.path), "--start-time", "0.2", "--start-frame", "3", "--no-video")
+    assert both.exit_code == 2 and "give one of them" in both.stderr
+    many = invoke(str(tiny_video.path), str(tiny_video.path), "--start-time", "0.2", "--no-video", "--csv", "-")
+    assert many.exit_code == 2 and "--start-time is for one video; with several videos give --start-frame N" in (
+        many.stderr)
+    for bad in ("-1", "1:75", "1_0", "ten"):
+        result = invoke(str(tiny_video.path), "--start-time", bad, "--no-video")
+        assert result.exit_code == 2 and f"'{bad}' is not a time" in result.stderr, result.stderr
+    assert listing(workdir) == []
+
+
 def test_a_long_run_logs_its_progress_where_stderr_is_not_a_terminal(tiny_video, workdir, monkeypatch):
     # A log or a CI job gets a line every _LOG_PROGRESS_SECONDS, not a bar's redraws; a run shorter than that, none.
     from logpolar_track.cli import run as cli_run

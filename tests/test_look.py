@@ -183,6 +183,11 @@ def test_frame_command_refuses_to_overwrite_and_bad_indexes(tiny_video, tmp_path
     assert "from 0 to 19" in line
     assert not (tmp_path / "g.png").exists()
     one_error_line(invoke("frame", tiny_video.path, "--at", 1, "--time", 0.1, "-o", tmp_path / "g.png"), 2)
+    by_clock = invoke("frame", tiny_video.path, "--time", "0:00.2", "-o", tmp_path / "t.png")  # as FFmpeg's -ss
+    by_index = invoke("frame", tiny_video.path, "--at", 6, "-o", tmp_path / "i.png")
+    assert by_clock.exit_code == by_index.exit_code == 0
+    assert (tmp_path / "t.png").read_bytes() == (tmp_path / "i.png").read_bytes()
+    assert "'1:75' is not a time" in one_error_line(invoke("frame", tiny_video.path, "--time", "1:75"), 2)
     one_error_line(invoke("frame", tmp_path / "missing.mp4", "-o", tmp_path / "g.png"), 1)
     line = one_error_line(invoke("frame", tiny_video.path, "--roi", "500,60,20", "-o", tmp_path / "g.png"), 2)
     assert "outside" in line

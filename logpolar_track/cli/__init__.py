@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import math
 import os
 import signal
 import sys
@@ -28,7 +29,7 @@ import cv2  # noqa: E402
 
 from .. import __version__  # noqa: E402
 from ..errors import LptrackError, OutputError, RoiError, UsageError  # noqa: E402
-from ..geometry import ROI_SYNTAX, Ellipse, parse_roi  # noqa: E402
+from ..geometry import ROI_SYNTAX, Ellipse, parse_number, parse_roi  # noqa: E402
 from ..results import stdout_errors  # noqa: E402
 from ..video import keep_frames_off_the_heap  # noqa: E402
 
@@ -265,6 +266,32 @@ class FrameRate(click.ParamType):
             self.fail(f"'{value}' is not a frame rate; give frames per second as a number (25, 29.97) or a "
                       f"fraction (30000/1001)", param, ctx)
         return rate
+
+
+class TimeParam(click.ParamType):
+    """A time in a video: seconds (``83.5``) or, as FFmpeg's ``-ss`` takes it, ``MM:SS`` or ``HH:MM:SS`` with
+    decimals (``1:23.5``, ``00:01:23.500``); never negative."""
+
+    name = "time"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, (int, float)):
+            seconds = float(value)
+        else:
+            parts = str(value).strip().split(":")
+            numbers = [parse_number(p) for p in parts]
+            # Hours and minutes are whole numbers; minutes and seconds after a colon are under 60.
+            clock_like = (len(parts) <= 3 and all(p.strip().isdigit() for p in parts[:-1])
+                          and all(n is not None and 0 <= n < 60 for n in numbers[1:]))
+            if None in numbers or not clock_like:
+                self.fail(f"'{value}' is not a time; give seconds (83.5) or HH:MM:SS (00:01:23.5, 1:23.5)", param,
+                          ctx)
+            seconds = 0.0
+            for number in numbers:
+                seconds = seconds * 60 + number
+        if not (math.isfinite(seconds) and seconds >= 0):
+            self.fail(f"'{value}' is not a time; give seconds >= 0 (83.5) or HH:MM:SS (00:01:23.5)", param, ctx)
+        return seconds
 
 
 class PathParam(click.Path):

@@ -23,7 +23,8 @@ from ..plot import PLOT_SUFFIXES, matplotlib_hint, plot_track
 from ..roi_fit import (ROUND_TOLERANCE, from_one_based, read_mask, roi_from_box, roi_from_mask, roi_from_points,
                        roi_from_quad)
 from ..video import input_label, read_frame
-from . import FrameRate, OneLineErrors, PathParam, WholeNumber, main, parse_roi_option, require_stdout, write_stdout
+from . import (FrameRate, OneLineErrors, PathParam, TimeParam, WholeNumber, main, parse_roi_option, require_stdout,
+               write_stdout)
 
 
 def _default_png(csv_path: Path, out_png: Path | None, kind: str) -> Path:
@@ -47,7 +48,8 @@ Examples:
 """)
 @click.argument("video", type=_VIDEO)
 @click.option("--at", "index", type=int, metavar="N", help="Frame index, 0 = first frame of the file. Default 0.")
-@click.option("--time", "time_s", type=float, metavar="SECONDS", help="Instead of --at: the frame at this time.")
+@click.option("--time", "time_s", type=TimeParam(), metavar="TIME",
+              help="Instead of --at: the frame at this time, in seconds (4.8) or HH:MM:SS (0:04.8).")
 @click.option("-o", "--out", "out_png", type=PathParam(dir_okay=False, path_type=Path), metavar="PNG",
               help="PNG to write. Default: <video stem>.frame<N>.png in the current folder "
                    "(with --roi: <video stem>.frame<N>.roi_<spec>.png).")

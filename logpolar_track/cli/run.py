@@ -27,9 +27,9 @@ from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..trackers.base import did_you_mean
 from ..outputs import make_output_folder, remove_empty_folders
-from ..video import check_fps, guess_image_sequence, input_label
-from . import (EXIT_FAILURE, PARAM_HELP, FrameRate, OneLineErrors, PathParam, WholeNumber, check_jobs_or_scheduler,
-               main, parse_param_options, parse_roi_option, stdout_reader_left)
+from ..video import check_fps, guess_image_sequence, input_label, read_frame
+from . import (EXIT_FAILURE, PARAM_HELP, FrameRate, OneLineErrors, PathParam, TimeParam, WholeNumber,
+               check_jobs_or_scheduler, main, parse_param_options, parse_roi_option, stdout_reader_left)
 
 
 class RunCommand(OneLineErrors):
@@ -142,6 +142,9 @@ Examples:
 @click.option("--param", "params", multiple=True, metavar="NAME=VALUE", help=PARAM_HELP)
 @click.option("--start-frame", type=WholeNumber(min=0), default=0, show_default=True, metavar="N",
               help="Frame index (0 = first) the ROI refers to; tracking starts there.")
+@click.option("--start-time", type=TimeParam(), default=None, metavar="TIME",
+              help="Instead of --start-frame: the frame at this time, in seconds (83.5) or HH:MM:SS (1:23.5), as "
+                   "'lptrack frame --time' finds it (one video only).")
 @click.option("--frames", "max_frames", type=WholeNumber(min=1), default=None, metavar="N",
               help="Track N frames (the start frame included), then stop. Default: to the end of the video.")
 @click.option("--fps", type=FrameRate(), default=None, metavar="RATE",
@@ -175,7 +178,7 @@ Examples:
                    "pip install 'dask[distributed]' and the files at the same paths on the workers.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary on stderr (failures still).")
 def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tracker: str,
-        params: tuple[str, ...], start_frame: int, max_frames: int | None, fps: float | None,
+        params: tuple[str, ...], start_frame: int, start_time: float | None, max_frames: int | None, fps: float | None,
         video_out: Path | None, csv_out: str | None, out_dir: Path | None, parents: bool, data_format: str,
         no_video: bool, overwrite: bool, skip_existing: bool, jobs: int | None, scheduler: str | None,
         quiet: bool) -> None:
@@ -219,10 +222,14 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     # With --scheduler even one video goes to the cluster, as a batch of one.
     single = (len(videos) == 1 and videos[0] != "-" and not Path(videos[0]).is_dir() and roi_file is None
               and scheduler is None)
+    if start_time is not None and start_frame:
+        raise UsageError("--start-frame and --start-time both say where to start; give one of them")
     if single:
         tuning = parse_param_options(params, [tracker])[tracker]
         _check_out_dir(out_dir, video_out=video_out, csv_out=csv_out, no_video=no_video, quiet=quiet,
                        parents=parents)
+        if start_time is not None:
+            start_frame = _frame_at_time(Path(videos[0]), start_time, fps, quiet)
         _run_one(Path(videos[0]), roi, tracker=tracker, tuning=tuning, start_frame=start_frame, max_frames=max_frames,
                  fps=fps, video_out=video_out, csv_out=csv_out, out_dir=out_dir, parents=parents,
                  data_format=data_format, no_video=no_video, overwrite=overwrite, skip_existing=skip_existing,
@@ -240,6 +247,10 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
         many = "with a folder"
     else:
         many = "with several videos"
+    if start_time is not None:
+        # Each video's frame at that time would be found by decoding it up to there before the batch starts.
+        raise UsageError(f"--start-time is for one video; {many} give --start-frame N, or a start_frame for each "
+                         f"video in --roi-file")
     if video_out is not None:
         raise UsageError(f"--out names one video's output in this process; {many} give --out-dir DIR")
     if csv_out not in (None, "-"):
@@ -333,6 +344,16 @@ def _reader_left(stream) -> bool:
     poller = select.poll()
     poller.register(fd, 0)  # no event asked for: POLLERR (a pipe without reader) and POLLHUP come anyway
     return any(events & (select.POLLERR | select.POLLHUP) for _, events in poller.poll(0))
+
+
+def _frame_at_time(video: Path, time_s: float, fps: float | None, quiet: bool) -> int:
+    """The index of ``video``'s frame at ``time_s`` seconds, as ``lptrack frame --time`` finds it (decoding up to
+    there: the run decodes those frames again), said on stderr."""
+    frame = read_frame(video, time_s=time_s, fps=fps)
+    if not quiet:
+        click.echo(f"lptrack: note: {time_s:g} s is frame {frame.index} of {input_label(video)} (at "
+                   f"{frame.time_s:.3f} s); tracking starts there", err=True)
+    return frame.index
 
 
 def _run_one(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, max_frames: int | None,

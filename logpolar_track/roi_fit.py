@@ -133,9 +133,9 @@ def roi_from_mask(mask, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
     ----------
     mask : array-like, shape (h, w) or (h, w, channels)
         The object's pixels are those above half the mask's largest value, so that a 0/1 mask, a 0/255 one and one
-        saved as JPEG (its edges blurred) give the same object; of a colour mask its brightest colour channel counts
-        (a transparent PNG's alpha where its colours are all black). Of several separate regions (8-connected), the
-        largest: a segmentation's specks elsewhere would pull the ellipse towards them.
+        saved as JPEG (its edges blurred) give the same object; of a colour mask its brightest colour channel counts,
+        of one with an alpha channel that varies (a transparent PNG, a cutout) the alpha. Of several separate regions
+        (8-connected), the largest: a segmentation's specks elsewhere would pull the ellipse towards them.
     round_tolerance : float
         As :func:`roi_from_box`.
 
@@ -149,7 +149,8 @@ def roi_from_mask(mask, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
     Raises
     ------
     RoiError
-        Not a 2-D image (or one with channels), not numbers, or no pixel above 0.
+        Not a 2-D image (or one with channels), not numbers, no pixel above 0, or an object touching all four
+        edges (a mask saved inverted).
     """
     try:
         image = np.asarray(mask)
@@ -157,8 +158,14 @@ def roi_from_mask(mask, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
     except (TypeError, ValueError):
         raise RoiError("a mask must be an image of numbers: an (h, w) or (h, w, channels) array") from None
     if values.ndim == 3 and values.shape[2] in (1, 2, 3, 4):
-        colour = values[..., : min(values.shape[2], 3)].max(axis=2)
-        values = values[..., 3] if values.shape[2] == 4 and not colour.any() else colour
+        # Grey + alpha (2 channels) or colour + alpha (4): an alpha that varies marks the object, as a cutout's
+        # (rembg, an image editor's layer) does whatever colours its pixels have; an opaque one says nothing.
+        colours = 1 if values.shape[2] == 2 else min(values.shape[2], 3)
+        alpha = values[..., colours] if values.shape[2] in (2, 4) else None
+        if alpha is not None and alpha.min() != alpha.max():
+            values = alpha
+        else:
+            values = values[..., :colours].max(axis=2)
     if values.ndim != 2 or min(values.shape) == 0:
         raise RoiError(f"a mask must be an (h, w) or (h, w, channels) image, got shape {image.shape}")
     values = np.nan_to_num(values, nan=0.0, posinf=0.0, neginf=0.0)
@@ -168,6 +175,12 @@ def roi_from_mask(mask, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
     inside = (values > peak / 2).astype(np.uint8)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(inside, connectivity=8)
     largest = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    left, top, width, height = (int(v) for v in stats[largest, :4])
+    if left == 0 and top == 0 and left + width == values.shape[1] and top + height == values.shape[0]:
+        # A mask saved inverted (the object black on white) or one that marks nothing (all white) would give an
+        # ellipse around the whole frame, which 'lptrack run' takes without a word.
+        raise RoiError(f"the mask's object touches all four edges of the {values.shape[1]}x{values.shape[0]} image; "
+                       "mark the object bright on a black background (is the mask inverted?)")
     ys, xs = np.nonzero(labels == largest)
     cx, cy = float(xs.mean()), float(ys.mean())
     # Moments of unit squares, not of their centres: 1/12 on each axis, so that small regions keep their size.

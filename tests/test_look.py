@@ -341,6 +341,28 @@ def test_roi_from_mask_reads_masks_as_segmentations_give_them():
         roi_from_mask(np.ones(5))
 
 
+def test_roi_from_mask_takes_a_cutouts_alpha_whatever_its_colours():
+    # A cutout (rembg, an editor's layer exported with transparency): the object's own colours, alpha marking it.
+    # Its brightest colours gave a part of the object; white under the transparent pixels gave the whole frame.
+    e = Ellipse(100.0, 80.0, 40.0, 22.0, 35.0)
+    truth = roi_from_mask(_filled_ellipse(e), round_tolerance=0)
+    alpha = _filled_ellipse(e)
+    texture = np.random.default_rng(1).integers(0, 256, (240, 320, 3), dtype=np.uint8)
+    for colours in (texture * (alpha[..., None] > 0), texture, np.full((240, 320, 3), 255, np.uint8)):
+        got = roi_from_mask(np.dstack([colours, alpha]), round_tolerance=0)
+        assert got == truth
+    opaque = np.dstack([np.dstack([alpha] * 3), np.full((240, 320), 255, np.uint8)])  # an opaque alpha: colours
+    assert roi_from_mask(opaque, round_tolerance=0) == truth
+
+
+def test_roi_from_mask_refuses_an_object_filling_the_frame():
+    # An inverted mask (object black on white) or an all-white one gave an ellipse around the frame, exit 0.
+    inverted = 255 - _filled_ellipse(Ellipse(100.0, 80.0, 40.0, 22.0, 35.0))
+    for mask in (inverted, np.full((240, 320), 255, np.uint8)):
+        with pytest.raises(RoiError, match="touches all four edges of the 320x240 image.*inverted"):
+            roi_from_mask(mask)
+
+
 def test_roi_command_from_a_mask(tiny_video, tmp_path):
     mask = tmp_path / "mask.png"
     cv2.imwrite(str(mask), _filled_ellipse(Ellipse(80.0, 60.0, 30.0, 12.0, 30.0), size=(120, 160)))
@@ -361,6 +383,9 @@ def test_roi_command_from_a_mask(tiny_video, tmp_path):
     empty = tmp_path / "empty.png"
     cv2.imwrite(str(empty), np.zeros((120, 160), np.uint8))
     assert "the mask is empty" in one_error_line(invoke("roi", tiny_video.path, "--from-mask", empty), 2)
+    inverted = tmp_path / "inverted.png"
+    cv2.imwrite(str(inverted), 255 - cv2.imread(str(mask), cv2.IMREAD_UNCHANGED))
+    assert "is the mask inverted?" in one_error_line(invoke("roi", tiny_video.path, "--from-mask", inverted), 2)
 
 
 def test_one_based_coordinates_are_moved_a_pixel_left_and_up(tmp_path):

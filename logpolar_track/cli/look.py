@@ -114,7 +114,8 @@ Examples:
 @click.option("--from-quad", "quad", metavar="X1,Y1,...,X4,Y4",
               help="A rotated box's four corners in pixels, in any order; gives the inscribed ellipse.")
 @click.option("--from-mask", "mask_path", type=PathParam(exists=True, dir_okay=False, path_type=Path), metavar="IMAGE",
-              help="An image of the frame's size marking the object (non-black); gives the ellipse of equal moments.")
+              help="An image of the frame's size marking the object (bright on black, or a PNG's alpha); gives the "
+                   "ellipse of equal moments.")
 @click.option("--one-based", is_flag=True,
               help="Coordinates count pixels from 1, as Matlab's, OTB's and UAV123's do (1 is subtracted).")
 @click.option("--round-tol", type=click.FloatRange(min=0.0, max=1.0), default=ROUND_TOLERANCE,
@@ -135,21 +136,24 @@ def roi(video: Path, index: int, box: str | None, points: str | None, quad: str 
                          "X1,Y1,...,X4,Y4 or --from-mask IMAGE")
     if one_based and mask_path is not None:
         raise UsageError("--one-based is for coordinates (--from-box, --from-points, --from-quad), not a mask")
-    mask = None if mask_path is None else read_mask(mask_path)
-    if box is not None:
-        result = roi_from_box(box, round_tolerance=round_tol)
-    elif quad is not None:
-        result = roi_from_quad(quad, round_tolerance=round_tol)
-    elif points is not None:
-        result = roi_from_points(points, round_tolerance=round_tol)
-    else:
+    if mask_path is not None:
+        mask = read_mask(mask_path)
+        shot = read_frame(video, index)
+        # The size first: a mask of another frame (or image) is the error to see, not what its pixels look like.
+        if mask.shape[:2] != (shot.height, shot.width):
+            raise UsageError(f"mask '{mask_path}' is {mask.shape[1]}x{mask.shape[0]} pixels but frame {index} of "
+                             f"'{input_label(video)}' is {shot.width}x{shot.height}: give a mask of the frame's size")
         result = roi_from_mask(mask, round_tolerance=round_tol)
-    if one_based:
-        result = from_one_based(result)
-    shot = read_frame(video, index)
-    if mask is not None and mask.shape[:2] != (shot.height, shot.width):
-        raise UsageError(f"mask '{mask_path}' is {mask.shape[1]}x{mask.shape[0]} pixels but frame {index} of "
-                         f"'{input_label(video)}' is {shot.width}x{shot.height}: give a mask of the frame's size")
+    else:
+        if box is not None:
+            result = roi_from_box(box, round_tolerance=round_tol)
+        elif quad is not None:
+            result = roi_from_quad(quad, round_tolerance=round_tol)
+        else:
+            result = roi_from_points(points, round_tolerance=round_tol)
+        if one_based:
+            result = from_one_based(result)
+        shot = read_frame(video, index)
     check_roi_fits(result, shot.width, shot.height, source=f"'{input_label(video)}' (frame {index})")
     spec = result.to_spec()
     write_stdout(spec + "\n")

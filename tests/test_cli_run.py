@@ -585,6 +585,25 @@ def test_start_time_starts_at_the_frame_shown_then(tiny_video, workdir):
     assert listing(workdir) == []
 
 
+def test_start_time_is_looked_up_after_the_cheap_checks(tiny_video, workdir, monkeypatch):
+    # Finding the frame at a time decodes the video up to it (minutes into a long one): a missing ROI or an output
+    # that exists was said only after that.
+    from logpolar_track.cli import run as cli_run
+
+    looked_up = []
+    real = cli_run._frame_at_time
+    monkeypatch.setattr(cli_run, "_frame_at_time", lambda *a: looked_up.append(a) or real(*a))
+    assert invoke(str(tiny_video.path), "--start-time", "0.2", "--no-video").exit_code == 0
+    assert len(looked_up) == 1
+    again = invoke(str(tiny_video.path), "--start-time", "0.2", "--no-video")
+    assert again.exit_code == 1 and "already exists" in again.stderr and len(looked_up) == 1
+    tiny_video.path.with_suffix(".roi").unlink()
+    no_roi = invoke(str(tiny_video.path), "--start-time", "0.2", "--no-video", "--csv", "-")
+    assert no_roi.exit_code == 2 and "no ROI given" in no_roi.stderr and len(looked_up) == 1
+    zero = invoke(str(tiny_video.path), "--start-time", "0.2", "--start-frame", "0", "--roi", "80,60,20")
+    assert zero.exit_code == 2 and "give one of them" in zero.stderr  # an explicit 0 is a start frame too
+
+
 def test_a_long_run_logs_its_progress_where_stderr_is_not_a_terminal(tiny_video, workdir, monkeypatch):
     # A log or a CI job gets a line every _LOG_PROGRESS_SECONDS, not a bar's redraws; a run shorter than that, none.
     from logpolar_track.cli import run as cli_run

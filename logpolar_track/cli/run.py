@@ -23,11 +23,12 @@ from ..errors import OutputError, UsageError, counted
 from ..executor import default_jobs
 from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, default_outputs, roi_sidecar_paths,
                         run_video)
+from ..pipeline import _check_outputs as check_outputs, _resolve_roi as resolve_roi  # what run_video checks first
 from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..trackers.base import did_you_mean
 from ..outputs import make_output_folder, remove_empty_folders
-from ..video import check_fps, guess_image_sequence, input_label, read_frame
+from ..video import VideoReader, check_fps, guess_image_sequence, input_label, read_frame
 from . import (EXIT_FAILURE, PARAM_HELP, FrameRate, OneLineErrors, PathParam, TimeParam, WholeNumber,
                check_jobs_or_scheduler, main, parse_param_options, parse_roi_option, stdout_reader_left)
 
@@ -222,16 +223,15 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     # With --scheduler even one video goes to the cluster, as a batch of one.
     single = (len(videos) == 1 and videos[0] != "-" and not Path(videos[0]).is_dir() and roi_file is None
               and scheduler is None)
-    if start_time is not None and start_frame:
+    if start_time is not None and (start_frame or click.get_current_context().get_parameter_source("start_frame")
+                                   is not click.core.ParameterSource.DEFAULT):  # --start-frame 0 too
         raise UsageError("--start-frame and --start-time both say where to start; give one of them")
     if single:
         tuning = parse_param_options(params, [tracker])[tracker]
         _check_out_dir(out_dir, video_out=video_out, csv_out=csv_out, no_video=no_video, quiet=quiet,
                        parents=parents)
-        if start_time is not None:
-            start_frame = _frame_at_time(Path(videos[0]), start_time, fps, quiet)
-        _run_one(Path(videos[0]), roi, tracker=tracker, tuning=tuning, start_frame=start_frame, max_frames=max_frames,
-                 fps=fps, video_out=video_out, csv_out=csv_out, out_dir=out_dir, parents=parents,
+        _run_one(Path(videos[0]), roi, tracker=tracker, tuning=tuning, start_frame=start_frame, start_time=start_time,
+                 max_frames=max_frames, fps=fps, video_out=video_out, csv_out=csv_out, out_dir=out_dir, parents=parents,
                  data_format=data_format, no_video=no_video, overwrite=overwrite, skip_existing=skip_existing,
                  quiet=quiet)
         return
@@ -351,13 +351,15 @@ def _frame_at_time(video: Path, time_s: float, fps: float | None, quiet: bool) -
     there: the run decodes those frames again), said on stderr."""
     frame = read_frame(video, time_s=time_s, fps=fps)
     if not quiet:
+        # An image sequence has no times of its own: said here, where the rate decides the frame, not only later.
+        assumed = f" at an assumed {frame.fps:g} fps; give --fps to set it" if frame.fps_guessed else ""
         click.echo(f"lptrack: note: {time_s:g} s is frame {frame.index} of {input_label(video)} (at "
-                   f"{frame.time_s:.3f} s); tracking starts there", err=True)
+                   f"{frame.time_s:.3f} s{assumed}); tracking starts there", err=True)
     return frame.index
 
 
-def _run_one(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, max_frames: int | None,
-             fps: float | None, video_out: Path | None, csv_out: str | None, out_dir: Path | None, parents: bool,
+def _run_one(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, start_time: float | None,
+             max_frames: int | None, fps: float | None, video_out: Path | None, csv_out: str | None, out_dir: Path | None, parents: bool,
              data_format: str, no_video: bool, overwrite: bool, skip_existing: bool, quiet: bool) -> None:
     """One video in this process, errors raised as they are (exit 1 or 2)."""
     name = None
@@ -366,16 +368,16 @@ def _run_one(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, 
         out_dir, name = base.parent, base.name
     created = make_output_folder(out_dir) if out_dir is not None else []
     try:
-        _run_one_into(video, roi, tracker=tracker, tuning=tuning, start_frame=start_frame, max_frames=max_frames,
-                      fps=fps, video_out=video_out, csv_out=csv_out, out_dir=out_dir, name=name,
+        _run_one_into(video, roi, tracker=tracker, tuning=tuning, start_frame=start_frame, start_time=start_time,
+                      max_frames=max_frames, fps=fps, video_out=video_out, csv_out=csv_out, out_dir=out_dir, name=name,
                       data_format=data_format, no_video=no_video, overwrite=overwrite, skip_existing=skip_existing,
                       quiet=quiet)
     finally:
         remove_empty_folders(created)  # a run that failed or was stopped leaves no folder made for it
 
 
-def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, max_frames: int | None,
-                  fps: float | None, video_out: Path | None, csv_out: str | None, out_dir: Path | None,
+def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, start_time: float | None,
+                  max_frames: int | None, fps: float | None, video_out: Path | None, csv_out: str | None, out_dir: Path | None,
                   name: str | None, data_format: str, no_video: bool, overwrite: bool, skip_existing: bool,
                   quiet: bool) -> None:
     default_video, default_csv = default_outputs(video, out_dir or ".", name)
@@ -385,6 +387,15 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
         csv_out = str(default_csv.with_suffix(FORMATS[data_format]))
     show = not quiet
     label = input_label(video)
+    if start_time is not None:
+        # Finding the frame decodes the video up to that time (minutes into a long one): the input, its ROI and the
+        # outputs are checked first, as a run checks them before its first frame.
+        with VideoReader(video, fps=fps):
+            pass
+        roi = resolve_roi(roi, video)
+        if not (overwrite or skip_existing):
+            check_outputs(video, None if no_video else video_out, csv_out, overwrite=False)
+        start_frame = _frame_at_time(video, start_time, fps, quiet)
     if skip_existing and outputs_complete(None if no_video else Path(video_out), Path(csv_out), source=video,
                                           start_frame=start_frame, max_frames=max_frames, roi=roi):
         if show:

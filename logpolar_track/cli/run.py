@@ -563,14 +563,21 @@ class _LogProgress:
     def __init__(self, label: str) -> None:
         self.label = label
         self.started = self.shown = time.monotonic()
+        # The first report's time and frames: the rate leaves out opening the video, seeking to --start-frame and
+        # starting the tracker (or a batch's workers), which made it read low for the rest of the run.
+        self.first: tuple[float, int] | None = None
 
     def __call__(self, done: int, total: int | None) -> None:
         now = time.monotonic()
+        if self.first is None:
+            self.first = (now, done)
         if now - self.shown < _LOG_PROGRESS_SECONDS:
             return
         self.shown = now
         of, share = (f" of {total}", f" ({100.0 * done / total:.0f} %)") if total else ("", "")
-        rate = done / max(now - self.started, 1e-9)
+        since, before = self.first
+        rate = (done - before) / (now - since) if done > before and now > since else done / max(now - self.started,
+                                                                                               1e-9)
         click.echo(f"lptrack: {self.label}: {done}{of} frames{share}, {rate:.0f} frames/s", err=True)
 
 

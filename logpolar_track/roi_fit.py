@@ -12,6 +12,7 @@ degrees counter-clockwise as seen on screen. Errors are :class:`~logpolar_track.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -204,7 +205,13 @@ def read_mask(path) -> np.ndarray:
     """
     from .video import opencv_path
 
-    image = cv2.imread(opencv_path(path, "mask", InputError), cv2.IMREAD_UNCHANGED)
+    text = opencv_path(path, "mask", InputError)
+    # Said as other inputs are (exit 1), not as click's "does not exist" usage error (exit 2).
+    if not Path(path).exists():
+        raise InputError(f"mask '{path}' not found; give the path of an image of the frame's size")
+    if Path(path).is_dir():
+        raise InputError(f"mask '{path}' is a folder; give the path of an image of the frame's size")
+    image = cv2.imread(text, cv2.IMREAD_UNCHANGED)
     if image is None:
         raise InputError(f"cannot read mask '{path}' as an image (PNG, JPEG, TIFF, BMP, ...)")
     return image

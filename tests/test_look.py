@@ -379,6 +379,8 @@ def test_roi_command_from_a_mask(tiny_video, tmp_path):
     not_image = tmp_path / "notes.png"
     not_image.write_text("not an image\n")
     assert "cannot read mask" in one_error_line(invoke("roi", tiny_video.path, "--from-mask", not_image), 1)
+    missing = one_error_line(invoke("roi", tiny_video.path, "--from-mask", tmp_path / "missing.png"), 1)
+    assert "not found" in missing  # exit 1 as for any input that is not there, not click's usage error (2)
     assert "not a mask" in one_error_line(invoke("roi", tiny_video.path, "--from-mask", mask, "--one-based"), 2)
     empty = tmp_path / "empty.png"
     cv2.imwrite(str(empty), np.zeros((120, 160), np.uint8))

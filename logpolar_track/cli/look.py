@@ -113,7 +113,7 @@ Examples:
               help="Points on the object's outline in pixels (at least 3, spread around it).")
 @click.option("--from-quad", "quad", metavar="X1,Y1,...,X4,Y4",
               help="A rotated box's four corners in pixels, in any order; gives the inscribed ellipse.")
-@click.option("--from-mask", "mask_path", type=PathParam(exists=True, dir_okay=False, path_type=Path), metavar="IMAGE",
+@click.option("--from-mask", "mask_path", type=PathParam(path_type=Path), metavar="IMAGE",
               help="An image of the frame's size marking the object (bright on black, or a PNG's alpha); gives the "
                    "ellipse of equal moments.")
 @click.option("--one-based", is_flag=True,

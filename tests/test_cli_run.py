@@ -1197,3 +1197,17 @@ def test_a_run_over_h264_cut_short_ends_with_its_last_frame(workdir):
     assert "could not be decoded" not in result.stderr
     assert ("lptrack: warning: truncated_h264.mp4: ended after 20 of the 40 frames its container announces"
             in result.stderr)
+
+
+def test_log_progress_rate_leaves_out_the_time_before_the_first_frame(monkeypatch, capsys):
+    # A minute spent seeking to --start-frame (or starting a batch's workers) kept the rate low for the whole run.
+    from logpolar_track.cli import run as cli_run
+
+    clock = [100.0]
+    monkeypatch.setattr(cli_run.time, "monotonic", lambda: clock[0])
+    log = cli_run._LogProgress("clip.mp4")
+    clock[0] = 160.0
+    log(1, 1000)
+    clock[0] = 200.0
+    log(401, 1000)
+    assert capsys.readouterr().err.splitlines()[-1] == "lptrack: clip.mp4: 401 of 1000 frames (40 %), 10 frames/s"

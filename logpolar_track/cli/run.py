@@ -569,13 +569,13 @@ class _LogProgress:
 
     def __call__(self, done: int, total: int | None) -> None:
         now = time.monotonic()
-        if self.first is None:
+        if self.first is None and done > 0:  # a batch reports its 0 frames as it starts its workers
             self.first = (now, done)
         if now - self.shown < _LOG_PROGRESS_SECONDS:
             return
         self.shown = now
         of, share = (f" of {total}", f" ({100.0 * done / total:.0f} %)") if total else ("", "")
-        since, before = self.first
+        since, before = self.first or (self.started, 0)
         rate = (done - before) / (now - since) if done > before and now > since else done / max(now - self.started,
                                                                                                1e-9)
         click.echo(f"lptrack: {self.label}: {done}{of} frames{share}, {rate:.0f} frames/s", err=True)

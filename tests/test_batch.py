@@ -197,10 +197,11 @@ def test_a_long_batch_logs_its_frames_where_stderr_is_not_a_terminal(work, monke
     monkeypatch.setattr(cli_run, "_LOG_PROGRESS_SECONDS", 0.0)  # a line at every report, as after each 30 s
     result = invoke("footage/day1", "--out-dir", "out", "--no-video", "--jobs", "1")
     assert result.exit_code == 0, result.stderr
-    lines = [line for line in result.stderr.splitlines() if line.startswith("lptrack: 2 videos: ") and " of " in line]
-    done = [int(line.split()[3]) for line in lines]
+    lines = [line for line in result.stderr.splitlines() if " videos done: " in line]
+    done = [int(line.split()[4]) for line in lines]
     assert done == sorted(done) and done[-1] == 44 and len(done) > 2
-    assert re.fullmatch(r"lptrack: 2 videos: 44 of 44 frames \(100 %\), [0-9]+ frames/s", lines[-1]), lines[-1]
+    assert lines[0].startswith("lptrack: 0/2 videos done: ")  # how many videos have settled, beside the frames
+    assert re.fullmatch(r"lptrack: 2/2 videos done: 44 of 44 frames \(100 %\), [0-9]+ frames/s", lines[-1]), lines[-1]
 
 
 def test_a_settled_video_line_says_its_lost_frames():

@@ -509,7 +509,7 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
     # video as it settles instead, so that a long batch shows how far it has got.
     videos_settled = [0]
     videos_total = len(plan.jobs) + len(plan.settled)
-    log_progress = None if quiet or terminal else _LogProgress(f"{videos_total} videos")
+    log_progress = None if quiet or terminal else _LogProgress(f"0/{videos_total} videos done")
 
     def stop_if_reader_left() -> None:
         # No more work for rows no one reads: SystemExit stops the workers and removes their temporary files.
@@ -521,6 +521,11 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
         if not quiet and not terminal:
             videos_settled[0] += 1
             click.echo(f"lptrack: {videos_settled[0]}/{videos_total} {_settled_line(outcome)}", err=True)
+
+    def log_batch_progress(progress: BatchProgress) -> None:
+        # 'lptrack: 3/9 videos done: 9000 of 90000 frames (10 %), 812 frames/s'
+        log_progress.label = f"{progress.videos_done}/{videos_total} videos done"
+        log_progress(progress.frames_done, progress.frames_total)
 
     def on_progress(progress: BatchProgress) -> None:
         bar.total = progress.frames_total
@@ -539,8 +544,7 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
                                 data_format=data_format, on_outcome=on_outcome,
                                 on_frames=lambda frames: stop_if_reader_left(),
                                 on_progress=on_progress if bar is not None else (
-                                    None if log_progress is None else
-                                    lambda progress: log_progress(progress.frames_done, progress.frames_total)))
+                                    None if log_progress is None else log_batch_progress))
         stop_if_reader_left()
     except BrokenPipeError:
         stdout_reader_left()

@@ -359,8 +359,9 @@ def _frame_at_time(video: Path, time_s: float, fps: float | None, quiet: bool) -
 
 
 def _run_one(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, start_time: float | None,
-             max_frames: int | None, fps: float | None, video_out: Path | None, csv_out: str | None, out_dir: Path | None, parents: bool,
-             data_format: str, no_video: bool, overwrite: bool, skip_existing: bool, quiet: bool) -> None:
+             max_frames: int | None, fps: float | None, video_out: Path | None, csv_out: str | None,
+             out_dir: Path | None, parents: bool, data_format: str, no_video: bool, overwrite: bool,
+             skip_existing: bool, quiet: bool) -> None:
     """One video in this process, errors raised as they are (exit 1 or 2)."""
     name = None
     if parents:  # _check_out_dir made sure lptrack names at least one of the outputs
@@ -377,9 +378,9 @@ def _run_one(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, 
 
 
 def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, start_time: float | None,
-                  max_frames: int | None, fps: float | None, video_out: Path | None, csv_out: str | None, out_dir: Path | None,
-                  name: str | None, data_format: str, no_video: bool, overwrite: bool, skip_existing: bool,
-                  quiet: bool) -> None:
+                  max_frames: int | None, fps: float | None, video_out: Path | None, csv_out: str | None,
+                  out_dir: Path | None, name: str | None, data_format: str, no_video: bool, overwrite: bool,
+                  skip_existing: bool, quiet: bool) -> None:
     default_video, default_csv = default_outputs(video, out_dir or ".", name)
     if not no_video and video_out is None:
         video_out = default_video

@@ -1018,6 +1018,20 @@ def test_reader_of_a_batch_stream_leaving_stops_the_batch_quietly(long_footage, 
     assert files_under(out) == ["v0.lptrack.mp4"]
 
 
+def test_reader_of_a_batchs_stderr_leaving_stops_the_lines_not_the_batch(long_footage, tmp_path):
+    # `lptrack run folder 2>&1 >/dev/null | grep -m1 failed`: the per-video lines (stderr not a terminal) made the
+    # batch stop with 141 after its second video once the reader had gone; before them it wrote nothing there
+    # until its summary, and the outputs are files.
+    out = tmp_path / "out"
+    process = subprocess.Popen([*LPTRACK, "run", str(long_footage), "--tracker", "spatial", "--no-video",
+                                "--out-dir", str(out), "--jobs", "1"],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    assert process.stderr.readline().startswith("lptrack: 1/4 ")
+    process.stderr.close()
+    assert process.wait(timeout=120) == 0
+    assert files_under(out) == [f"v{i}.lptrack.csv" for i in range(4)]
+
+
 def test_a_worker_stopped_as_it_starts_reports_interrupted(monkeypatch):
     # The parent's SIGTERM (Ctrl-C, the reader of --csv - gone) can land in a worker's set-up, before its task:
     # reported as interrupted, not a traceback from multiprocessing.

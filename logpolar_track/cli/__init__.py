@@ -190,6 +190,25 @@ def _stdout_to_devnull() -> None:
     os.close(devnull)
 
 
+def echo_progress(line: str) -> None:
+    """A progress line on stderr (where it is not a terminal: a batch's videos, a long run's 30 s lines, bench's
+    tenths). A reader of stderr that went away (``2>&1 | grep -m1 failed``) ends the lines, not the work: the
+    outputs are files, and before these lines such a batch wrote nothing to stderr until its summary."""
+    if sys.stderr is None:
+        return
+    try:
+        click.echo(line, err=True)
+    except BrokenPipeError:
+        # Later writes (the summary) and Python's flush at exit go to the null device, as stdout's do.
+        try:
+            fd = sys.stderr.fileno()
+        except (AttributeError, OSError, ValueError):
+            return
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, fd)
+        os.close(devnull)
+
+
 def stdout_reader_left() -> None:
     """The reader of stdout went away (``| head``): stop quietly with :data:`EXIT_BROKEN_PIPE`, as a program
     killed by SIGPIPE would."""

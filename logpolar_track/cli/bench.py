@@ -15,8 +15,8 @@ from ..errors import OutputError, UsageError
 from ..executor import TRACKING_OPENCV_THREADS
 from ..outputs import check_image_suffix, check_output_path, write_text_atomic, writes_in_place
 from ..plot import PLOT_SUFFIXES, matplotlib_hint
-from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, PathParam, WholeNumber, check_jobs_or_scheduler, main,
-               parse_param_options, require_stdout, write_stdout)
+from . import (EXIT_FAILURE, PARAM_HELP, OneLineErrors, PathParam, WholeNumber, check_jobs_or_scheduler,
+               echo_progress, main, parse_param_options, require_stdout, write_stdout)
 
 
 #: Skipped folders named one by one before the rest are counted (a dataset laid out otherwise, UAV123's images
@@ -202,8 +202,8 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
             # Not a terminal (a log, a CI job): a line at each tenth of the runs rather than a bar's redraws.
             runs_done[0] += 1
             if runs_done[0] * 10 // runs_total > (runs_done[0] - 1) * 10 // runs_total:
-                click.echo(f"lptrack: {runs_done[0]}/{runs_total} runs done (last: {result['tracker']} on "
-                           f"{result['sequence']})", err=True)
+                echo_progress(f"lptrack: {runs_done[0]}/{runs_total} runs done (last: {result['tracker']} on "
+                              f"{result['sequence']})")
 
     try:
         results = run_bench(sequences, names, params={"tracker_params": tuning}, jobs=jobs, scheduler=scheduler,
@@ -269,7 +269,7 @@ def _speed(trackers: str | None, json_out: str | None, quiet: bool, overwrite: b
     _note_skipped(skipped, quiet)
     # A line per step, terminal or not: the steps take seconds each, so the lines are few.
     doc = speed_report(names, n_frames=n_frames,
-                       on_step=None if quiet else (lambda label: click.echo(f"lptrack: timing {label}", err=True)))
+                       on_step=None if quiet else (lambda label: echo_progress(f"lptrack: timing {label}")))
     doc["skipped_trackers"] = [{"tracker": n, "reason": why} for n, why in skipped]
     table = format_report(doc)
     _emit(table, doc, json_out, overwrite)

@@ -30,7 +30,8 @@ from ..trackers.base import did_you_mean
 from ..outputs import make_output_folder, remove_empty_folders
 from ..video import VideoReader, check_fps, guess_image_sequence, input_label, read_frame
 from . import (EXIT_FAILURE, PARAM_HELP, FrameRate, OneLineErrors, PathParam, TimeParam, WholeNumber,
-               check_jobs_or_scheduler, main, parse_param_options, parse_roi_option, stdout_reader_left)
+               check_jobs_or_scheduler, echo_progress, main, parse_param_options, parse_roi_option,
+               stdout_reader_left)
 
 
 class RunCommand(OneLineErrors):
@@ -521,7 +522,7 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
         stop_if_reader_left()
         if not quiet and not terminal:
             videos_settled[0] += 1
-            click.echo(f"lptrack: {videos_settled[0]}/{videos_total} {_settled_line(outcome)}", err=True)
+            echo_progress(f"lptrack: {videos_settled[0]}/{videos_total} {_settled_line(outcome)}")
 
     def log_batch_progress(progress: BatchProgress) -> None:
         # 'lptrack: 3/9 videos done: 9000 of 90000 frames (10 %), 812 frames/s'
@@ -583,7 +584,7 @@ class _LogProgress:
         since, before = self.first or (self.started, 0)
         rate = (done - before) / (now - since) if done > before and now > since else done / max(now - self.started,
                                                                                                1e-9)
-        click.echo(f"lptrack: {self.label}: {done}{of} frames{share}, {rate:.0f} frames/s", err=True)
+        echo_progress(f"lptrack: {self.label}: {done}{of} frames{share}, {rate:.0f} frames/s")
 
 
 def _settled_line(outcome: VideoOutcome) -> str:

@@ -195,7 +195,9 @@ def read_roi_sidecar(video_path) -> Ellipse | None:
     return found[0][1] if found else None
 
 
-def _resolve_roi(roi: RoiLike, video_path) -> Ellipse:
+def resolve_roi(roi: RoiLike, video_path) -> Ellipse:
+    """``roi`` as an :class:`Ellipse`, or, when it is None, the video's ``.roi`` sidecar's (see
+    :func:`roi_sidecar_paths`); a :class:`UsageError` naming the sidecars looked for when there is none."""
     if roi is not None:
         return as_ellipse(roi)
     found = read_roi_sidecar(video_path)
@@ -302,7 +304,7 @@ def track_video(path, roi: RoiLike = None, tracker: str | Tracker = DEFAULT_TRAC
     engine = _make_tracker(tracker, tracker_params)
     _check_max_frames(max_frames)
     with VideoReader(path, start_frame=start_frame, fps=fps) as reader:
-        for _, result in _track(reader, _resolve_roi(roi, path), engine, max_frames):
+        for _, result in _track(reader, resolve_roi(roi, path), engine, max_frames):
             yield result
 
 
@@ -415,8 +417,9 @@ def _progress_callback(progress: ProgressLike, total: int | None):
 _IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".gif", ".bmp", ".tif", ".tiff", ".webp")
 
 
-def _check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> None:
-    """Raise before any work if an output cannot be written (see :func:`run_video`)."""
+def check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> None:
+    """Raise before any work if an output cannot be written (see :func:`run_video`): what :func:`run_video` checks
+    before its first frame, for a caller with work of its own to do first (``lptrack run --start-time``)."""
     planned = []
     if video_out is not None:
         if str(video_out) == "-":
@@ -502,12 +505,12 @@ def run_video(path, roi: RoiLike = None, *, tracker: str | Tracker = DEFAULT_TRA
     tracker_name = engine.name or type(engine).__name__
     video_path = Path(path)
     with VideoReader(video_path, start_frame=start_frame, fps=fps) as reader:
-        ellipse = _resolve_roi(roi, video_path)
+        ellipse = resolve_roi(roi, video_path)
         check_roi_fits(ellipse, reader.width, reader.height, source=video_path.name)
         around = ellipse.moved(ellipse.cx, ellipse.cy, FLAT_ROI_EXTENT)
         roi_flat = roi_spread(reader.first_frame, around) < FLAT_ROI_SPREAD
         # Inputs are checked (above) before outputs, outputs before any frame is tracked or written.
-        _check_outputs(video_path, video_out, csv_out, overwrite)
+        check_outputs(video_path, video_out, csv_out, overwrite)
         announced = frames_to_track(reader.frame_count, start_frame, max_frames) or 0  # 0: not known
         total = announced or max_frames
         csv_writer = video_writer = written = None

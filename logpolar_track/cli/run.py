@@ -21,9 +21,8 @@ from ..batch import (VIDEO_EXTENSIONS, BatchProgress, BatchSummary, VideoOutcome
                      outputs_complete, plan_batch, read_roi_file, run_batch)
 from ..errors import OutputError, UsageError, counted
 from ..executor import default_jobs
-from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, default_outputs, roi_sidecar_paths,
-                        run_video)
-from ..pipeline import _check_outputs as check_outputs, _resolve_roi as resolve_roi  # what run_video checks first
+from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, check_outputs, default_outputs,
+                        resolve_roi, roi_sidecar_paths, run_video)
 from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..trackers.base import did_you_mean

@@ -591,8 +591,8 @@ def test_start_time_is_looked_up_after_the_cheap_checks(tiny_video, workdir, mon
     from logpolar_track.cli import run as cli_run
 
     looked_up = []
-    real = cli_run._frame_at_time
-    monkeypatch.setattr(cli_run, "_frame_at_time", lambda *a: looked_up.append(a) or real(*a))
+    real = cli_run._start_frame_at_time
+    monkeypatch.setattr(cli_run, "_start_frame_at_time", lambda *a: looked_up.append(a) or real(*a))
     assert invoke(str(tiny_video.path), "--start-time", "0.2", "--no-video").exit_code == 0
     assert len(looked_up) == 1
     again = invoke(str(tiny_video.path), "--start-time", "0.2", "--no-video")

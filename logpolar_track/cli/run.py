@@ -346,7 +346,7 @@ def _reader_left(stream) -> bool:
     return any(events & (select.POLLERR | select.POLLHUP) for _, events in poller.poll(0))
 
 
-def _frame_at_time(video: Path, time_s: float, fps: float | None, quiet: bool) -> int:
+def _start_frame_at_time(video: Path, time_s: float, fps: float | None, quiet: bool) -> int:
     """The index of ``video``'s frame at ``time_s`` seconds, as ``lptrack frame --time`` finds it (decoding up to
     there: the run decodes those frames again), said on stderr."""
     frame = read_frame(video, time_s=time_s, fps=fps)
@@ -396,7 +396,7 @@ def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: 
         roi = resolve_roi(roi, video)
         if not (overwrite or skip_existing):
             check_outputs(video, None if no_video else video_out, csv_out, overwrite=False)
-        start_frame = _frame_at_time(video, start_time, fps, quiet)
+        start_frame = _start_frame_at_time(video, start_time, fps, quiet)
     if skip_existing and outputs_complete(None if no_video else Path(video_out), Path(csv_out), source=video,
                                           start_frame=start_frame, max_frames=max_frames, roi=roi):
         if show:
@@ -521,7 +521,9 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
         stop_if_reader_left()
         if not quiet and not terminal:
             videos_settled[0] += 1
-            echo_progress(f"lptrack: {videos_settled[0]}/{videos_total} {_settled_line(outcome)}")
+            # Counted, not listed: a resumed batch (--skip-existing) of thousands would list every video done before.
+            if outcome.status != "skipped":
+                echo_progress(f"lptrack: {videos_settled[0]}/{videos_total} {_settled_line(outcome)}")
 
     def log_batch_progress(progress: BatchProgress) -> None:
         # 'lptrack: 3/9 videos done: 9000 of 90000 frames (10 %), 812 frames/s'
@@ -589,8 +591,6 @@ class _LogProgress:
 def _settled_line(outcome: VideoOutcome) -> str:
     """One video of a batch as it settles, for a stderr that is not a terminal: ``clip.mp4: 148 frames (2 lost)
     in 0.6 s``; a failure's reason is said again with the batch's summary, for a reader of its last lines."""
-    if outcome.status == "skipped":
-        return f"{outcome.label}: skipped (outputs exist)"
     if outcome.status == "failed":
         return f"{outcome.label}: failed: {outcome.reason}"
     lost = f" ({outcome.lost} lost)" if outcome.lost else ""

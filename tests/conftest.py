@@ -8,6 +8,7 @@ with a ``.roi`` sidecar) in a fresh per-test folder, so tests may write next to 
 
 from __future__ import annotations
 
+import inspect
 import os
 
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
@@ -15,12 +16,25 @@ os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 from dataclasses import dataclass  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+import click.testing  # noqa: E402
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 from logpolar_track.geometry import Ellipse  # noqa: E402
 from logpolar_track.synthetic import Pose, similarity_path, synthetic_sequence  # noqa: E402
+
+
+class CliRunner(click.testing.CliRunner):
+    """click's CliRunner with stderr kept apart from stdout (``result.stdout`` / ``result.stderr``) on every click
+    the project supports: click >= 8.2 always keeps it apart, click 8.1 only when given ``mix_stderr=False`` (a
+    parameter 8.2 removed). ``result.output`` differs: stdout and stderr interleaved in 8.2, stdout alone in 8.1,
+    so tests read ``stdout`` or ``stderr``."""
+
+    def __init__(self, **kwargs):
+        if "mix_stderr" in inspect.signature(click.testing.CliRunner.__init__).parameters:  # click 8.1
+            kwargs.setdefault("mix_stderr", False)
+        super().__init__(**kwargs)
 
 
 @dataclass(frozen=True)

@@ -20,9 +20,8 @@ from pathlib import Path
 
 import cv2
 import pytest
-from click.testing import CliRunner
 
-from conftest import _make_video, damage_middle
+from conftest import CliRunner, _make_video, damage_middle
 from logpolar_track.batch import (BatchProgress, VideoInput, VideoOutcome, announced_job_frames, data_frame_span,
                                   find_videos, plan_batch, read_roi_file, run_batch)
 from logpolar_track.cli import main
@@ -612,7 +611,7 @@ def test_parents_names_outputs_alike_however_the_videos_are_split_between_runs(w
         result = CliRunner().invoke(main, ["run", *args, "--parents"])
         assert result.exit_code == 2
         assert "--parents would name nothing: it names the outputs lptrack names, and --csv - and --no-video leave " \
-               "it none; drop --parents" in result.output
+               "it none; drop --parents" in result.stderr
 
 
 @pytest.mark.parametrize("args, fragment", [

@@ -16,7 +16,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from click.testing import CliRunner
+from conftest import CliRunner
 
 from logpolar_track.bench import (evaluate_run, format_paired, mean_over_starts, paired_differences, run_bench, run_one,
                                   start_roi)

@@ -21,8 +21,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from click.testing import CliRunner
-from conftest import decode_all
+from conftest import CliRunner, decode_all
 
 from logpolar_track.cli import main
 from logpolar_track.contact_sheet import sheet_geometry, write_contact_sheet

@@ -15,7 +15,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from click.testing import CliRunner
+from conftest import CliRunner
 
 from logpolar_track import samples as S
 from logpolar_track.errors import LptrackError

@@ -7,7 +7,7 @@ import json
 import os
 
 import pytest
-from click.testing import CliRunner
+from conftest import CliRunner
 
 from logpolar_track.cli import main
 from logpolar_track.speed import THESIS_SECONDS, format_report, frames_from_environment, pin_to_one_cpu, unpin
@@ -22,7 +22,7 @@ def _invoke(*args):
 def test_speed_prints_table_with_thesis_baselines_and_end_to_end_rows():
     result = _invoke("--trackers", "fixed", "--quiet")
     assert result.exit_code == 0, result.output
-    out = result.output
+    out = result.stdout
     assert "| tracker | circle ms/frame (fps) | ellipse ms/frame (fps) | thesis circle / ellipse s/frame |" in out
     fixed_row = next(line for line in out.splitlines() if line.startswith("| fixed |"))
     cells = [c.strip() for c in fixed_row.strip("|").split("|")]
@@ -60,7 +60,7 @@ def test_speed_json_file(tmp_path):
     out = tmp_path / "speed.json"
     result = _invoke("--trackers", "diffdecomp", "--json", str(out), "-q")
     assert result.exit_code == 0, result.output
-    assert "| diffdecomp |" in result.output
+    assert "| diffdecomp |" in result.stdout
     assert json.loads(out.read_text())["trackers"][0]["tracker"] == "diffdecomp"
 
 
@@ -72,7 +72,7 @@ def test_speed_json_file(tmp_path):
 def test_speed_usage_errors(args, fragment):
     result = _invoke(*args)
     assert result.exit_code == 2
-    assert result.output.startswith("lptrack: error: ") and fragment in result.output
+    assert result.stderr.startswith("lptrack: error: ") and fragment in result.stderr
 
 
 def test_speed_frames_variable(monkeypatch):
@@ -84,7 +84,7 @@ def test_speed_frames_variable(monkeypatch):
     with pytest.raises(ValueError, match="LPTRACK_SPEED_FRAMES"):
         frames_from_environment()
     result = CliRunner().invoke(main, ["bench", "--speed"], env={"LPTRACK_SPEED_FRAMES": "many"})
-    assert result.exit_code == 2 and "LPTRACK_SPEED_FRAMES" in result.output
+    assert result.exit_code == 2 and "LPTRACK_SPEED_FRAMES" in result.stderr
 
 
 def _doc(rows):

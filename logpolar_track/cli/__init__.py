@@ -25,9 +25,8 @@ _USER_LOG_LEVEL = "OPENCV_LOG_LEVEL" in os.environ
 os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
 
 import click  # noqa: E402
-import cv2  # noqa: E402
 
-from .. import __version__  # noqa: E402
+from .. import __version__, cv_compat  # noqa: E402
 from ..errors import LptrackError, OutputError, RoiError, UsageError  # noqa: E402
 from ..geometry import ROI_SYNTAX, Ellipse, parse_number, parse_roi  # noqa: E402
 from ..results import stdout_errors  # noqa: E402
@@ -68,7 +67,11 @@ def _stop(signum, frame):
 
 keep_frames_off_the_heap()  # the CLI owns its process; a library import does not tune malloc
 if not _USER_LOG_LEVEL:
-    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+    cv_compat.set_log_level(cv_compat.LOG_LEVEL_ERROR)
+
+# Plain `lptrack`: click >= 8.2 raises this UsageError to show the help (exit 2); click 8.1 has no such class and
+# shows the help and exits 0 itself (`except ()` catches nothing).
+_NO_ARGS_IS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", ())
 
 
 class LptrackGroup(click.Group):
@@ -79,7 +82,7 @@ class LptrackGroup(click.Group):
         try:
             with help_to_stdout():
                 return super().parse_args(ctx, args)
-        except click.exceptions.NoArgsIsHelpError:
+        except _NO_ARGS_IS_HELP:
             raise  # plain `lptrack` shows the help
         except click.UsageError as exc:
             click.echo(f"lptrack: error: {exc.format_message()} (see 'lptrack --help')", err=True)

@@ -1480,14 +1480,15 @@ def test_where_the_refinement_is_not_believed_the_scale_filter_gives_the_size(ra
     """With the refinement never believed (``refine_max_distance`` 0), the size reported is the scale filter's:
     on a rigid disc zooming 1 % a frame it follows the zoom with the lag the filter's partial reading leaves
     (measured over 4 seeds: median error 2.2-6.7 %, at most 10.3 %), while the tracker's own estimate -- which
-    the filter never feeds -- is exactly what it is without the filter."""
+    the filter never feeds -- is exactly what it is without the filter. Without colour: on colour video the
+    colour's extent pulls both sizes towards it where the filter's size is reported (see _EXTENT_GAIN)."""
     roi = Ellipse.circle(320, 240, 40)
     poses = _zoom(rate)
     for seed in range(4):
         frames = list(synthetic_sequence(poses, roi, size=(640, 480), seed=seed))
         tracked = {}
         for on in (True, False):
-            tracker = create_tracker("lpcf", refine_max_distance=0.0, scale_filter=on)
+            tracker = create_tracker("lpcf", refine_max_distance=0.0, scale_filter=on, colour_weight=0.0)
             tracker.init(frames[0], roi)
             tracked[on] = [(tracker.update(f), tracker.cursor) for f in frames[1:]]
         results = [result for result, _ in tracked[True]]
@@ -1803,3 +1804,35 @@ def test_the_running_level_starts_from_the_tracked_frames_matches():
         matches.append(tracker.diagnostics["match"])
     assert max(matches) < 0.9
     assert tracker.match_level == pytest.approx(np.mean(matches), rel=1e-6)
+
+
+@pytest.mark.parametrize("grown", [0.8, 1.0, 1.25])
+def test_the_colour_extent_reads_a_coloured_objects_size_change(grown):
+    """The size cue of ``_EXTENT_GAIN``: the colour likelihood's region about the patch's centre measures the object
+    whatever the tracker's own scale says. A textured red disc on a textured green ground, grown by ``grown``, read
+    at the first frame's pose (scale 1): the cue's log size changes by log(grown) within 0.06 (a twentieth of a
+    size change of 25 %); on grey video there is no cue."""
+    rng = np.random.default_rng(5)
+    ground = np.dstack([rng.integers(0, 60, (480, 640)), rng.integers(120, 200, (480, 640)),
+                        rng.integers(0, 60, (480, 640))]).astype(np.uint8)
+
+    def scene(radius: float) -> np.ndarray:
+        frame = ground.copy()
+        disc = np.zeros((480, 640), np.uint8)
+        cv2.circle(disc, (320, 240), int(round(radius)), 1, -1)
+        red = np.dstack([rng.integers(0, 50, (480, 640)), rng.integers(0, 50, (480, 640)),
+                         rng.integers(150, 255, (480, 640))]).astype(np.uint8)
+        frame[disc > 0] = red[disc > 0]
+        return frame
+
+    tracker = create_tracker("lpcf")
+    first = scene(40)
+    tracker.init(first, Ellipse.circle(320, 240, 40))
+    at_first_pose = Similarity(320.0, 240.0, 1.0, 0.0, 1.0)
+    before = tracker._colour_extent(first, at_first_pose)
+    after = tracker._colour_extent(scene(40 * grown), at_first_pose)
+    assert before is not None and after is not None
+    assert abs((after - before) - math.log(grown)) < 0.06
+    grey = create_tracker("lpcf")
+    grey.init(cv2.cvtColor(first, cv2.COLOR_BGR2GRAY), Ellipse.circle(320, 240, 40))
+    assert grey.colour is None  # the cue is read only where the colour model is

@@ -181,16 +181,21 @@ class OneLineErrors(click.Command):
             raise UsageError(f"{exc.format_message()} (see 'lptrack {self.name} --help')") from None
 
 
-def _stdout_to_devnull() -> None:
-    """Point file descriptor 1 at the null device, so that Python's flush of stdout at exit, which would fail
-    again (and print "Exception ignored ..."), succeeds; nothing where stdout is not a file (a test runner's)."""
+def _to_devnull(stream) -> None:
+    """Point ``stream``'s file descriptor at the null device, so that Python's flush of it at exit, which would fail
+    again (and print "Exception ignored ..."), succeeds; nothing where it is not a file (a test runner's)."""
     try:
-        fd = sys.stdout.fileno()
+        fd = stream.fileno()
     except (AttributeError, OSError, ValueError):
         return
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, fd)
     os.close(devnull)
+
+
+def _stdout_to_devnull() -> None:
+    """Stdout's reader went away: see :func:`_to_devnull`."""
+    _to_devnull(sys.stdout)
 
 
 def echo_progress(line: str) -> None:
@@ -202,14 +207,7 @@ def echo_progress(line: str) -> None:
     try:
         click.echo(line, err=True)
     except BrokenPipeError:
-        # Later writes (the summary) and Python's flush at exit go to the null device, as stdout's do.
-        try:
-            fd = sys.stderr.fileno()
-        except (AttributeError, OSError, ValueError):
-            return
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, fd)
-        os.close(devnull)
+        _to_devnull(sys.stderr)  # later writes (the summary) and Python's flush at exit go nowhere, as stdout's do
 
 
 def stdout_reader_left() -> None:

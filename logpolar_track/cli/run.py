@@ -583,8 +583,10 @@ class _LogProgress:
         self.shown = now
         of, share = (f" of {total}", f" ({100.0 * done / total:.0f} %)") if total else ("", "")
         since, before = self.first or (self.started, 0)
-        rate = (done - before) / (now - since) if done > before and now > since else done / max(now - self.started,
-                                                                                               1e-9)
+        if done > before and now > since:
+            rate = (done - before) / (now - since)
+        else:
+            rate = done / max(now - self.started, 1e-9)
         echo_progress(f"lptrack: {self.label}: {done}{of} frames{share}, {rate:.0f} frames/s")
 
 

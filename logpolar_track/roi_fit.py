@@ -174,7 +174,7 @@ def roi_from_mask(mask, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
     if peak <= 0:
         raise RoiError("the mask is empty: no pixel above 0 marks the object")
     inside = (values > peak / 2).astype(np.uint8)
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(inside, connectivity=8)
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(inside, connectivity=8)
     largest = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     left, top, width, height = (int(v) for v in stats[largest, :4])
     if left == 0 and top == 0 and left + width == values.shape[1] and top + height == values.shape[0]:

@@ -193,11 +193,6 @@ def _to_devnull(stream) -> None:
     os.close(devnull)
 
 
-def _stdout_to_devnull() -> None:
-    """Stdout's reader went away: see :func:`_to_devnull`."""
-    _to_devnull(sys.stdout)
-
-
 def echo_progress(line: str) -> None:
     """A progress line on stderr (where it is not a terminal: a batch's videos, a long run's 30 s lines, bench's
     tenths). A reader of stderr that went away (``2>&1 | grep -m1 failed``) ends the lines, not the work: the
@@ -213,7 +208,7 @@ def echo_progress(line: str) -> None:
 def stdout_reader_left() -> None:
     """The reader of stdout went away (``| head``): stop quietly with :data:`EXIT_BROKEN_PIPE`, as a program
     killed by SIGPIPE would."""
-    _stdout_to_devnull()
+    _to_devnull(sys.stdout)
     sys.exit(EXIT_BROKEN_PIPE)
 
 
@@ -228,7 +223,7 @@ def stdout_failures():
     except BrokenPipeError:
         stdout_reader_left()
     except OutputError:
-        _stdout_to_devnull()
+        _to_devnull(sys.stdout)
         raise
 
 

@@ -136,24 +136,24 @@ def roi(video: Path, index: int, box: str | None, points: str | None, quad: str 
                          "X1,Y1,...,X4,Y4 or --from-mask IMAGE")
     if one_based and mask_path is not None:
         raise UsageError("--one-based is for coordinates (--from-box, --from-points, --from-quad), not a mask")
-    if mask_path is not None:
+    # Coordinates are read before the frame is decoded (a typo is the error to see); a mask after, its size first.
+    if box is not None:
+        result = roi_from_box(box, round_tolerance=round_tol)
+    elif quad is not None:
+        result = roi_from_quad(quad, round_tolerance=round_tol)
+    elif points is not None:
+        result = roi_from_points(points, round_tolerance=round_tol)
+    else:
         mask = read_mask(mask_path)
-        shot = read_frame(video, index)
-        # The size first: a mask of another frame (or image) is the error to see, not what its pixels look like.
+    if one_based:
+        result = from_one_based(result)
+    shot = read_frame(video, index)
+    if mask_path is not None:
+        # A mask of another frame (or image) is the error to see, not what its pixels look like.
         if mask.shape[:2] != (shot.height, shot.width):
             raise UsageError(f"mask '{mask_path}' is {mask.shape[1]}x{mask.shape[0]} pixels but frame {index} of "
                              f"'{input_label(video)}' is {shot.width}x{shot.height}: give a mask of the frame's size")
         result = roi_from_mask(mask, round_tolerance=round_tol)
-    else:
-        if box is not None:
-            result = roi_from_box(box, round_tolerance=round_tol)
-        elif quad is not None:
-            result = roi_from_quad(quad, round_tolerance=round_tol)
-        else:
-            result = roi_from_points(points, round_tolerance=round_tol)
-        if one_based:
-            result = from_one_based(result)
-        shot = read_frame(video, index)
     check_roi_fits(result, shot.width, shot.height, source=f"'{input_label(video)}' (frame {index})")
     spec = result.to_spec()
     write_stdout(spec + "\n")

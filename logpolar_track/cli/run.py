@@ -223,8 +223,9 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     # With --scheduler even one video goes to the cluster, as a batch of one.
     single = (len(videos) == 1 and videos[0] != "-" and not Path(videos[0]).is_dir() and roi_file is None
               and scheduler is None)
-    if start_time is not None and (start_frame or click.get_current_context().get_parameter_source("start_frame")
-                                   is not click.core.ParameterSource.DEFAULT):  # --start-frame 0 too
+    # Given at all, 0 too (its default is 0).
+    if start_time is not None and (click.get_current_context().get_parameter_source("start_frame")
+                                   is not click.core.ParameterSource.DEFAULT):
         raise UsageError("--start-frame and --start-time both say where to start; give one of them")
     if single:
         tuning = parse_param_options(params, [tracker])[tracker]

@@ -775,8 +775,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
                          or (self._sliver and lp_height >= self.trust_high))
         shown = refined
         if self._scale_filter is not None:
-            shown = self._shown_size(frame, refined, size_believed)
-            refined = self.cursor  # its scale moved by the colour extent's correction, if any (_EXTENT_GAIN)
+            shown, refined = self._shown_size(frame, refined, size_believed)
+            self.cursor = refined  # its scale pulled towards the colour's extent, if it was (_EXTENT_GAIN)
             if not size_believed:
                 refined = self._scale_near_shown(refined, shown.scale)
         # Velocity: the last frame's motion, damped (the alpha-beta update v = d (v + correction), written out), so
@@ -1623,11 +1623,12 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self._blur_cache = (frame, blur_k, x0, y0, x1, y1, image, level)
         return image, x0, y0, level
 
-    def _shown_size(self, frame, state: Similarity, believed: bool) -> Similarity:
+    def _shown_size(self, frame, state: Similarity, believed: bool) -> tuple[Similarity, Similarity]:
         """``state`` with the size to report: its own where the gradient refinement was ``believed`` (a rigid
         object: the refinement's scale is right to tenths of a per cent), else the scale filter's, searched around
         the last size reported, moved by ``_SHOWN_FOLLOWS`` of the tracker's own change of scale since (see
-        ``scale_filter``)."""
+        ``scale_filter``), and pulled towards the colour's extent (:meth:`_pull_to_colour_extent`); and ``state``
+        itself, its scale pulled alike."""
         self._scale_sample = None
         if believed:
             self.shown_scale = state.scale
@@ -1640,23 +1641,28 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self.shown_scale = state.scale * math.exp(log_ratio)
             if abs(log_change) < _SCALE_REUSE_ROWS * self._scale_filter.log_step:
                 self._scale_sample = rows
-        extent = None
         if self.colour is not None and not believed and state.score >= self.lost_threshold:
-            extent = self._colour_extent(frame, state)
-        if extent is not None and self._extent_frames < _EXTENT_REF_FRAMES:
+            state = self._pull_to_colour_extent(frame, state)
+        self._shown_own_scale = state.scale
+        return Similarity(state.cx, state.cy, self.shown_scale, state.rotation_deg, state.score), state
+
+    def _pull_to_colour_extent(self, frame, state: Similarity) -> Similarity:
+        """``state`` and :attr:`shown_scale` pulled slowly towards the size the colour sees (see ``_EXTENT_GAIN``),
+        once its first ``_EXTENT_REF_FRAMES`` readings have set its reference; ``state`` as it is where there is no
+        reading (see :meth:`_colour_extent`) or while the reference is being set."""
+        extent = self._colour_extent(frame, state)
+        if extent is None:
+            return state
+        if self._extent_frames < _EXTENT_REF_FRAMES:
             self._extent_ref += extent - math.log(self.shown_scale)
             self._extent_frames += 1
-        elif extent is not None:
-            # A slow pull of the size reported, and of the tracker's own by as much, towards the colour's (see
-            # _EXTENT_GAIN); the estimate, self.cursor, takes the new scale.
-            gap = extent - self._extent_ref / self._extent_frames - math.log(self.shown_scale)
-            correction = math.exp(_EXTENT_GAIN * min(max(gap, -_EXTENT_MAX_GAP), _EXTENT_MAX_GAP))
-            self.cursor = state = Similarity(state.cx, state.cy, state.scale * correction, state.rotation_deg,
-                                             state.score)
-            self.shown_scale = min(max(self.shown_scale * correction, state.scale / _SHOWN_MAX_RATIO),
-                                   state.scale * _SHOWN_MAX_RATIO)
-        self._shown_own_scale = state.scale
-        return Similarity(state.cx, state.cy, self.shown_scale, state.rotation_deg, state.score)
+            return state
+        gap = extent - self._extent_ref / self._extent_frames - math.log(self.shown_scale)
+        correction = math.exp(_EXTENT_GAIN * min(max(gap, -_EXTENT_MAX_GAP), _EXTENT_MAX_GAP))
+        state = Similarity(state.cx, state.cy, state.scale * correction, state.rotation_deg, state.score)
+        self.shown_scale = min(max(self.shown_scale * correction, state.scale / _SHOWN_MAX_RATIO),
+                               state.scale * _SHOWN_MAX_RATIO)
+        return state
 
     def _colour_extent(self, frame, state: Similarity) -> float | None:
         """The object's size as its colour sees it (see ``_EXTENT_GAIN``): natural log of the square root of the

@@ -290,6 +290,13 @@ def announced_frame_count(path) -> int:
     return int(count) if math.isfinite(count) and count > 0 else 0
 
 
+#: How far (seconds) a constant rate's timestamps may lie from ``index / fps``: containers that store milliseconds
+#: (MKV, WebM) round them, by up to 0.5 ms, and frame 0's stamp, which times count from, too. Past it, a frame's
+#: time is its timestamp (:meth:`VideoReader.time_of`). Half a frame left a phone's varying rate's first frames up to
+#: that far off: a clip at 30 fps, then 15 (22.5 on average), had frame 1 at 0.044 s, not 0.033, and speeds from the
+#: CSV 0.75 and 1.5 times the true ones over its first two intervals.
+STAMP_ROUNDING_S = 0.0015
+
 #: Frame rates (frames per second) lptrack takes: 1e-300 gave time_s of 300 digits, and an encoder that refused it
 #: was reported as "no codec could be opened".
 FPS_RANGE = (0.001, 1e6)
@@ -351,7 +358,8 @@ class VideoReader:
     fps_guessed : bool
     timestamps_from : int or None
         The first frame whose time (``time_s``) is the stream's own timestamp, once iteration has reached it; None
-        while every frame is within half a frame of ``index / fps`` (constant frame rate). See :meth:`time_of`.
+        while every frame is within :data:`STAMP_ROUNDING_S` of ``index / fps`` (constant frame rate). See
+        :meth:`time_of`.
     frame_count : int
         Frame count the container reports; may be approximate, and 0 when unknown.
     undecodable : list of (int, int)
@@ -465,10 +473,10 @@ class VideoReader:
     # -- reading ---------------------------------------------------------------------------------------
     def time_of(self, index: int, stamp: float | None = None) -> float:
         """Time in seconds of frame ``index``: ``index / fps``, or the frame's timestamp ``stamp`` (seconds, taken
-        relative to the stream's frame 0, whose time is 0) from the first frame whose timestamp
-        lies more than half a frame from that on (:attr:`timestamps_from`): a variable frame rate, as phones
-        record in low light, where ``index / fps`` (the average rate) drifts by seconds. A constant rate's
-        timestamps, which some containers round to milliseconds, never leave ``index / fps``. Times stay
+        relative to the stream's frame 0, whose time is 0) from the first frame whose timestamp lies more than
+        :data:`STAMP_ROUNDING_S` (or half a frame, if less) from that on (:attr:`timestamps_from`): a variable frame
+        rate, as phones record in low light, where ``index / fps`` (the average rate) drifts by seconds. A constant
+        rate's timestamps, which some containers round to milliseconds, never leave ``index / fps``. Times stay
         increasing whatever a stream's timestamps do."""
         nominal = index / self.fps
         if stamp is not None and self._stamped:
@@ -479,7 +487,7 @@ class VideoReader:
             stamp -= self._stamp_offset
         usable = stamp is not None and math.isfinite(stamp) and stamp > self._last_time
         if (self.timestamps_from is None and usable and self._stamped
-                and abs(stamp - nominal) > 0.5 / self.fps):
+                and abs(stamp - nominal) > min(STAMP_ROUNDING_S, 0.5 / self.fps)):
             self.timestamps_from = index
         if self.timestamps_from is None:
             time_s = nominal

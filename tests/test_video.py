@@ -687,6 +687,57 @@ def test_a_phone_video_is_read_and_tracked_upright_as_players_show_it(tiny_video
     assert max(abs(r.state.rotation_deg - p.rotation_deg) for r, p in zip(results, tiny_video.poses)) < 2.0
 
 
+
+def _mp4_boxes(data, start=0, end=None, parents=()):
+    """``(offset, type, size, parents' offsets)`` of every box of an ISO BMFF (.mp4) file, depth first."""
+    end = len(data) if end is None else end
+    while start + 8 <= end:
+        size, kind = int.from_bytes(data[start:start + 4], "big"), bytes(data[start + 4:start + 8])
+        yield start, kind, size, parents
+        if kind in (b"moov", b"trak", b"mdia", b"minf", b"stbl"):
+            yield from _mp4_boxes(data, start + 8, start + size, parents + (start,))
+        start += size
+
+
+def _retime_mp4(path, ticks) -> list[float]:
+    """Give an OpenCV-written .mp4 (one track, its index after the frames) the frame durations ``ticks``, in its
+    track's time units (512 a frame at 30 fps), as a phone's varying rate has; its frames' times in seconds."""
+    data = bytearray(path.read_bytes())
+    boxes = list(_mp4_boxes(data))
+    (stts, _, size, parents), = [box for box in boxes if box[1] == b"stts"]
+    (mdhd,), (mdat,) = [[at for at, kind, _, _ in boxes if kind == name] for name in (b"mdhd", b"mdat")]
+    assert mdat < parents[0] and data[mdhd + 8] == 0, "test set-up: an index after the frames, a version-0 mdhd"
+    runs = []
+    for tick in ticks:
+        if runs and runs[-1][1] == tick:
+            runs[-1][0] += 1
+        else:
+            runs.append([1, tick])
+    table = np.array([0, len(runs), *[n for run in runs for n in run]], ">u4").tobytes()
+    new = (8 + len(table)).to_bytes(4, "big") + b"stts" + table
+    for at in parents:  # the boxes holding it grow with it; the frames' offsets, before them, stay
+        data[at:at + 4] = (int.from_bytes(data[at:at + 4], "big") + len(new) - size).to_bytes(4, "big")
+    data[stts:stts + size] = new
+    edts = data.find(b"edts", parents[0])
+    if edts > 0:  # the edit list would end the video at its first duration: made a free box
+        data[edts:edts + 4] = b"free"
+    path.write_bytes(bytes(data))
+    units = int.from_bytes(data[mdhd + 20:mdhd + 24], "big")
+    return [sum(ticks[:k]) / units for k in range(len(ticks))]
+
+
+def test_a_phones_varying_rate_is_timed_by_its_timestamps_from_its_first_frames(tiny_video):
+    """A clip recorded at 30 fps, then 15 in low light, then 30 (23.1 fps on average): every frame's time (a run's
+    time_s) is its own timestamp. Times within half a frame of index / 23.1 fps were kept: frames 1 and 2 at 0.043
+    and 0.087 s, not 0.033 and 0.067, and speeds from them 0.77, then 2.5 times the true ones."""
+    stamps = _retime_mp4(tiny_video.path, [512] * 7 + [1024] * 6 + [512] * 7)
+    assert stamps[1] == pytest.approx(1 / 30) and stamps[-1] == pytest.approx(25 / 30)
+    with VideoReader(tiny_video.path) as reader:
+        assert reader.fps == pytest.approx(20 / (26 / 30))  # frames / duration
+        times = [time_s for _, time_s, _ in reader]
+    assert times == pytest.approx(stamps, abs=1e-6)
+    assert reader.timestamps_from == 1
+
 # -- image sequences ------------------------------------------------------------------------------------------
 def _numbered_images(folder, numbers, pattern="frame_%04d.png", size=(48, 64)):
     """Images whose every pixel is their position in ``numbers`` times 10 (grey level), one per number."""
@@ -805,13 +856,14 @@ def test_a_folder_of_images_suggests_its_pattern(tmp_path):
 
 def test_times_follow_the_streams_timestamps_once_the_rate_varies(tiny_video):
     """A constant rate's timestamps (some containers round them to milliseconds) keep ``index / fps``; from the
-    first frame whose timestamp lies more than half a frame from it (a phone slowing to 15 fps in low light),
+    first frame whose timestamp lies more than 1.5 ms from it (a phone slowing to 15 fps in low light),
     ``time_s`` is the timestamp, and stays increasing whatever the stream says."""
     with VideoReader(tiny_video.path) as reader:  # 30 fps
         assert [reader.time_of(i, round(i / 30, 3)) for i in range(3)] == [0.0, 1 / 30, 2 / 30]
         assert reader.timestamps_from is None
-        assert reader.time_of(3, 0.1 + 0.4 / 30) == 0.1  # 0.4 of a frame late: still the nominal time
-        assert reader.time_of(4, 0.2) == 0.2 and reader.timestamps_from == 4  # 2 frames late: the timestamp
+        assert reader.time_of(3, 0.1 + 0.0014) == 0.1  # 1.4 ms late: still the nominal time
+        assert reader.time_of(4, 4 / 30 + 0.4 / 30) == pytest.approx(0.1466667)  # 0.4 of a frame late: the stamp
+        assert reader.timestamps_from == 4
         assert reader.time_of(5, 0.21) == 0.21  # from then on, the timestamps
         assert reader.time_of(6, 0.1) == pytest.approx(0.21 + 1 / 30)  # going back: a frame on instead
     with VideoReader(tiny_video.path, fps=30) as reader:  # --fps: the rate given, whatever the timestamps

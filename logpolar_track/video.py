@@ -223,10 +223,133 @@ def opencv_path(path, what: str, error: type[LptrackError] = VideoError) -> str:
 
 def _open_capture(path: Path) -> cv2.VideoCapture:
     """OpenCV's capture for ``path``, or an :class:`_ImageSequenceCapture` for an image-sequence pattern (one
-    seam, so tests can stand in for odd containers)."""
+    seam, so tests can stand in for odd containers); a :class:`_MirroredCapture` for a video whose display matrix
+    mirrors the picture."""
     if is_image_sequence(path):
         return _ImageSequenceCapture(_numbered_images(path))
-    return cv2.VideoCapture(opencv_path(path, "video"))
+    capture = cv2.VideoCapture(opencv_path(path, "video"))
+    shown = _MIRRORS.get(display_matrix(path)) if capture.isOpened() else None
+    # OpenCV turns frames by the matrix's angle alone, which takes a mirror for a half turn: its own turning is
+    # switched off and the matrix applied here instead.
+    if shown is not None and capture.set(cv2.CAP_PROP_ORIENTATION_AUTO, 0):
+        return _MirroredCapture(capture, shown)
+    return capture
+
+
+#: How a decoded frame becomes the picture shown, for the display matrices that mirror it, keyed by their
+#: :func:`display_matrix`. OpenCV turns the other four (a quarter, half or three-quarter turn) itself.
+_MIRRORS = {
+    (-1, 0, 0, 1): lambda frame: cv2.flip(frame, 1),  # left and right swapped (a mirror image)
+    (1, 0, 0, -1): lambda frame: cv2.flip(frame, 0),  # top and bottom swapped
+    (0, 1, 1, 0): cv2.transpose,  # a quarter turn clockwise, then left and right swapped
+    (0, -1, -1, 0): lambda frame: cv2.flip(cv2.transpose(frame), -1),  # the same, counter-clockwise
+}
+
+#: Boxes an ISO BMFF file (.mp4, .mov, .m4v, .3gp) may begin with.
+_BMFF_FIRST_BOXES = {b"ftyp", b"moov", b"mdat", b"free", b"skip", b"wide", b"pnot", b"uuid"}
+
+
+def display_matrix(path) -> tuple[int, int, int, int] | None:
+    """How an ISO BMFF video (.mp4, .mov: a phone's) says to show its frames: the first video track's display
+    matrix, times the movie's, as the signs ``(a, b, c, d)`` of its 2x2 part, or None (not such a file, no video
+    track, a matrix that is not a quarter turn or a mirror, or the file cannot be read).
+
+    In QuickTime's convention, which players follow, a coded pixel ``(x, y)`` is shown at ``(a x + c y,
+    b x + d y)``, then moved into the picture: ``(1, 0, 0, 1)`` as coded, ``(0, 1, -1, 0)`` a quarter turn
+    clockwise (a phone held upright), ``(-1, 0, 0, 1)`` mirrored left to right. Only the headers are read, not
+    the sample tables (megabytes in a long recording).
+
+    References
+    ----------
+    ISO/IEC 14496-12 (ISO base media file format), the ``mvhd`` and ``tkhd`` boxes' ``matrix``.
+    """
+    try:
+        with open(path, "rb") as file:
+            size = os.fstat(file.fileno()).st_size
+            if file.read(8)[4:] not in _BMFF_FIRST_BOXES:
+                return None
+            moov = next((box for box in _bmff_boxes(file, 0, size) if box[0] == b"moov"), None)
+            if moov is None:
+                return None
+            movie, track = ((1, 0), (0, 1)), None  # a movie matrix is optional: none is the identity
+            for kind, start, end in _bmff_boxes(file, moov[1], moov[2]):
+                if kind == b"mvhd":
+                    movie = _box_matrix(file, start, end, 36)
+                elif kind == b"trak" and _handler(file, start, end) == b"vide":
+                    track = next((_box_matrix(file, at, stop, 40) for name, at, stop in _bmff_boxes(file, start, end)
+                                  if name == b"tkhd"), None)
+                    break
+    except OSError:
+        return None
+    if track is None or movie is None:
+        return None
+    (a, b), (c, d) = track
+    (e, f), (g, h) = movie
+    signs = tuple(int(np.sign(value)) for value in (a * e + b * g, a * f + b * h, c * e + d * g, c * f + d * h))
+    quarter_turns = {(1, 0, 0, 1), (0, 1, -1, 0), (-1, 0, 0, -1), (0, -1, 1, 0)}
+    return signs if signs in quarter_turns or signs in _MIRRORS else None
+
+
+def _bmff_boxes(file, start: int, end: int):
+    """``(type, contents' start, end)`` of the boxes of an ISO BMFF ``file`` between byte offsets ``start`` and
+    ``end`` (a file's top level, or a box's contents), read by seeking from header to header."""
+    at = start
+    while at + 8 <= end:
+        file.seek(at)
+        header = file.read(16)
+        if len(header) < 8:
+            return
+        size, kind, contents = int.from_bytes(header[:4], "big"), header[4:8], at + 8
+        if size == 1:  # a 64-bit size follows
+            size, contents = int.from_bytes(header[8:16], "big"), at + 16
+        elif size == 0:  # to the end
+            size = end - at
+        if at + size > end or contents > at + size:
+            return
+        yield kind, contents, at + size
+        at += size
+
+
+def _handler(file, start: int, end: int) -> bytes | None:
+    """The handler type (``vide``, ``soun``, ...) of the track whose ``trak`` box's contents span ``start``-``end``."""
+    for kind, at, stop in _bmff_boxes(file, start, end):
+        if kind == b"mdia":
+            for name, hdlr, _ in _bmff_boxes(file, at, stop):
+                if name == b"hdlr":
+                    file.seek(hdlr + 8)  # version and flags, pre_defined
+                    return file.read(4)
+    return None
+
+
+def _box_matrix(file, start: int, end: int, at: int) -> tuple[tuple[int, int], tuple[int, int]] | None:
+    """The 2x2 part ``((a, b), (c, d))`` (16.16 fixed point) of the matrix of the ``mvhd`` or ``tkhd`` box whose
+    contents span ``start``-``end``: ``at`` bytes in for version 0 (36 in ``mvhd``, 40 in ``tkhd``), 12 more in
+    version 1, whose times take 8 bytes each."""
+    file.seek(start)
+    at += start + (12 if file.read(1) == b"\x01" else 0)
+    file.seek(at)
+    fields = file.read(20)  # a, b, u, c, d
+    if len(fields) < 20 or at + 20 > end:
+        return None
+    a, b, _, c, d = (int.from_bytes(fields[i:i + 4], "big", signed=True) for i in range(0, 20, 4))
+    return (a, b), (c, d)
+
+
+class _MirroredCapture:
+    """A ``cv2.VideoCapture`` (its own turning switched off) whose frames come out as ``shown`` makes them: the
+    picture players show for a display matrix that mirrors it (:data:`_MIRRORS`). Composition: cv2 classes are
+    unsafe to subclass."""
+
+    def __init__(self, capture: cv2.VideoCapture, shown):
+        self._capture = capture
+        self._shown = shown
+
+    def retrieve(self) -> tuple[bool, np.ndarray | None]:
+        ok, frame = self._capture.retrieve()
+        return (ok, np.ascontiguousarray(self._shown(frame))) if ok and frame is not None else (ok, frame)
+
+    def __getattr__(self, name):
+        return getattr(self._capture, name)
 
 
 class _ImageSequenceCapture:

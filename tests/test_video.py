@@ -653,15 +653,17 @@ def test_write_video_helper_writes_readable_clip(tmp_path):
     assert count_frames(path)[:2] == (5, (64, 48))
 
 
-def _turn_display_quarter_clockwise(path) -> None:
+def _turn_display_quarter_clockwise(path, abcd=(0, 1, -1, 0)) -> None:
     """Give an OpenCV-written .mp4 the display matrix of a phone held upright (its track header's rotation
-    of 90 degrees clockwise), as players and FFmpeg read it; the coded frames are left as they are."""
+    of 90 degrees clockwise), or the one whose 2x2 part is ``abcd`` (QuickTime's a, b, c, d: a coded pixel (x, y)
+    is shown at (a x + c y, b x + d y)), as players and FFmpeg read it; the coded frames are left as they are."""
     data = bytearray(path.read_bytes())
     at = data.find(b"tkhd")
     if at < 0 or data[at + 4] != 0:
         pytest.skip("no version-0 track header in the written .mp4")
     matrix = at + 4 + 4 + 20 + 8 + 8  # version/flags, times/id/duration, reserved, layer/group/volume/reserved
-    data[matrix:matrix + 36] = np.array([0, 1 << 16, 0, -(1 << 16), 0, 0, 0, 0, 1 << 30], ">i4").tobytes()
+    a, b, c, d = (value << 16 for value in abcd)
+    data[matrix:matrix + 36] = np.array([a, b, 0, c, d, 0, 0, 0, 1 << 30], ">i4").tobytes()
     path.write_bytes(bytes(data))
 
 
@@ -686,6 +688,49 @@ def test_a_phone_video_is_read_and_tracked_upright_as_players_show_it(tiny_video
     # Turning the picture keeps the sense of rotation: the object's turn is read as it is shown.
     assert max(abs(r.state.rotation_deg - p.rotation_deg) for r, p in zip(results, tiny_video.poses)) < 2.0
 
+
+
+@pytest.mark.parametrize("abcd, shown", [
+    ((-1, 0, 0, 1), lambda coded: coded[:, ::-1]),
+    ((1, 0, 0, -1), lambda coded: coded[::-1]),
+    ((0, 1, 1, 0), lambda coded: coded.transpose(1, 0, 2)),
+    ((0, -1, -1, 0), lambda coded: coded.transpose(1, 0, 2)[::-1, ::-1]),
+], ids=["mirrored", "upside-down-mirror", "quarter-turn-mirrored", "three-quarter-turn-mirrored"])
+def test_a_mirroring_display_matrix_is_shown_as_players_show_it(tiny_video, abcd, shown):
+    """A display matrix that mirrors the picture (a selfie camera's left-right swap) is applied as FFmpeg and
+    QuickTime apply it. OpenCV turns frames by the matrix's angle alone: the mirror came out turned half round
+    (upside down), the quarter turn mirrored as a plain quarter turn."""
+    coded = decode_all(tiny_video.path)
+    _turn_display_quarter_clockwise(tiny_video.path, abcd)
+    with VideoReader(tiny_video.path) as reader:
+        frames = [frame for _, _, frame in reader]
+    assert len(frames) == len(coded)
+    assert all(np.array_equal(frame, shown(c)) for frame, c in zip(frames, coded))
+    assert video_module.display_matrix(tiny_video.path) == abcd
+
+
+def test_a_mirrored_phone_video_is_tracked_as_shown(tiny_video):
+    """Tracked in the mirrored picture: x mirrored, and the object's turns read the other way round."""
+    from logpolar_track.pipeline import track_video
+
+    _turn_display_quarter_clockwise(tiny_video.path, (-1, 0, 0, 1))
+    width = tiny_video.size[0]
+    roi = tiny_video.roi
+    results = list(track_video(tiny_video.path, f"{width - 1 - roi.cx:g},{roi.cy:g},{roi.a:g}"))
+    assert [r.status for r in results[1:]] == ["tracked"] * (len(results) - 1)
+    errors = [np.hypot(r.state.ellipse.cx - (width - 1 - p.cx), r.state.ellipse.cy - p.cy)
+              for r, p in zip(results, tiny_video.poses)]
+    assert max(errors) < 1.5
+    assert max(abs(r.state.rotation_deg + p.rotation_deg) for r, p in zip(results, tiny_video.poses)) < 2.0
+
+
+def test_only_an_iso_media_files_display_matrix_is_read(tmp_path):
+    """An .avi, a text file, a truncated .mp4 header: no display matrix, and no error."""
+    write_video(tmp_path / "clip.avi", [np.zeros((48, 64, 3), np.uint8)] * 2)
+    (tmp_path / "notes.mp4").write_text("not a video")
+    (tmp_path / "cut.mp4").write_bytes(b"\x00\x00\x00\x20ftypisom\x00\x00")
+    assert [video_module.display_matrix(tmp_path / name) for name in ("clip.avi", "notes.mp4", "cut.mp4")] == \
+        [None, None, None]
 
 
 def _mp4_boxes(data, start=0, end=None, parents=()):

@@ -420,6 +420,11 @@ def announced_frame_count(path) -> int:
 #: CSV 0.75 and 1.5 times the true ones over its first two intervals.
 STAMP_ROUNDING_S = 0.0015
 
+#: How far a constant rate's timestamps may drift from ``index / fps`` on top of :data:`STAMP_ROUNDING_S`, as a
+#: fraction of that time (0.001: 1 ms a second): a container may state its rate roughly (FLV to 3 digits: 59.94 fps
+#: is read as 59.9375, whose ``index / fps`` parted from the timestamps by 1.5 ms after 25 s, with nothing varying).
+STAMP_DRIFT = 0.001
+
 #: Frame rates (frames per second) lptrack takes: 1e-300 gave time_s of 300 digits, and an encoder that refused it
 #: was reported as "no codec could be opened".
 FPS_RANGE = (0.001, 1e6)
@@ -481,8 +486,8 @@ class VideoReader:
     fps_guessed : bool
     timestamps_from : int or None
         The first frame whose time (``time_s``) is the stream's own timestamp, once iteration has reached it; None
-        while every frame is within :data:`STAMP_ROUNDING_S` of ``index / fps`` (constant frame rate). See
-        :meth:`time_of`.
+        while every frame is within :data:`STAMP_ROUNDING_S` (and :data:`STAMP_DRIFT`, or half a frame if less) of
+        ``index / fps`` (constant frame rate). See :meth:`time_of`.
     frame_count : int
         Frame count the container reports; may be approximate, and 0 when unknown.
     undecodable : list of (int, int)
@@ -597,10 +602,11 @@ class VideoReader:
     def time_of(self, index: int, stamp: float | None = None) -> float:
         """Time in seconds of frame ``index``: ``index / fps``, or the frame's timestamp ``stamp`` (seconds, taken
         relative to the stream's frame 0, whose time is 0) from the first frame whose timestamp lies more than
-        :data:`STAMP_ROUNDING_S` (or half a frame, if less) from that on (:attr:`timestamps_from`): a variable frame
-        rate, as phones record in low light, where ``index / fps`` (the average rate) drifts by seconds. A constant
-        rate's timestamps, which some containers round to milliseconds, never leave ``index / fps``. Times stay
-        increasing whatever a stream's timestamps do."""
+        :data:`STAMP_ROUNDING_S` plus :data:`STAMP_DRIFT` of ``index / fps`` (or half a frame, if less) from that
+        on (:attr:`timestamps_from`): a variable frame rate, as phones record in low light, where ``index / fps``
+        (the average rate) drifts by seconds. A constant rate's timestamps, which some containers round to
+        milliseconds, and whose rate some state to a few digits only, stay within that. Times stay increasing
+        whatever a stream's timestamps do."""
         nominal = index / self.fps
         if stamp is not None and self._stamped:
             if self._stamp_offset is None:
@@ -610,7 +616,7 @@ class VideoReader:
             stamp -= self._stamp_offset
         usable = stamp is not None and math.isfinite(stamp) and stamp > self._last_time
         if (self.timestamps_from is None and usable and self._stamped
-                and abs(stamp - nominal) > min(STAMP_ROUNDING_S, 0.5 / self.fps)):
+                and abs(stamp - nominal) > min(STAMP_ROUNDING_S + STAMP_DRIFT * nominal, 0.5 / self.fps)):
             self.timestamps_from = index
         if self.timestamps_from is None:
             time_s = nominal

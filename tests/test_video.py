@@ -915,6 +915,25 @@ def test_times_follow_the_streams_timestamps_once_the_rate_varies(tiny_video):
         assert reader.time_of(4, 0.2) == 4 / 30 and reader.timestamps_from is None
 
 
+def test_a_constant_rate_whose_container_states_it_roughly_keeps_index_over_fps(tmp_path):
+    """FLV stores a video's rate to 3 digits (59.94 is read back as 959/16 = 59.9375 fps) and its timestamps in
+    milliseconds: ``index / fps`` parts from the timestamps by 0.7 us a frame, 1.5 ms after 1,508 frames (25 s).
+    Nothing varies: the times stay ``index / fps``, with no "frame rate varies" note (timestamps rounded to
+    milliseconds, 16 or 17 ms apart, made speeds from the CSV jump by 6 % from row to row)."""
+    path = tmp_path / "constant.flv"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"FLV1"), 59.94, (16, 16))
+    if not writer.isOpened():
+        pytest.skip("this OpenCV writes no .flv")
+    for k in range(1800):
+        writer.write(np.full((16, 16, 3), k % 256, np.uint8))
+    writer.release()
+    with VideoReader(path) as reader:
+        assert reader.fps == pytest.approx(59.9375)
+        times = [time_s for _, time_s, _ in reader]
+    assert len(times) == 1800 and reader.timestamps_from is None
+    assert times == [k / reader.fps for k in range(1800)]
+
+
 @pytest.mark.parametrize("name", ["odd.mp4", "odd.avi"])
 def test_an_odd_frame_size_is_padded_not_cut(tmp_path, name):
     """4:2:0 codecs need even sizes: OpenCV wrote 641 x 479 frames as 640 x 478, dropping the last column and

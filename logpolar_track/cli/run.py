@@ -27,7 +27,7 @@ from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..trackers.base import did_you_mean
 from ..outputs import make_output_folder, remove_empty_folders
-from ..video import STAMP_ROUNDING_S, VideoReader, check_fps, guess_image_sequence, input_label, read_frame
+from ..video import VideoReader, check_fps, guess_image_sequence, input_label, read_frame
 from . import (EXIT_FAILURE, PARAM_HELP, FrameRate, OneLineErrors, PathParam, TimeParam, WholeNumber,
                check_jobs_or_scheduler, echo_progress, main, parse_param_options, parse_roi_option,
                stdout_reader_left)
@@ -466,7 +466,7 @@ def _varying_rate(label: str, first: int, fps: float, start: int, video: bool) -
     if first == start:
         return f"{label}'s frame rate varies: time_s follows its timestamps, not frame / {fps:g} fps{played}"
     return (f"{label}'s frame rate varies: time_s follows its timestamps from frame {first} on (before, frame / "
-            f"{fps:g} fps was within {STAMP_ROUNDING_S * 1000:g} ms of them){played}")
+            f"{fps:g} fps kept to them){played}")
 
 
 def _image_gaps(label: str, gaps) -> str:

@@ -264,6 +264,8 @@ def display_matrix(path) -> tuple[int, int, int, int] | None:
     ISO/IEC 14496-12 (ISO base media file format), the ``mvhd`` and ``tkhd`` boxes' ``matrix``.
     """
     try:
+        if not Path(path).is_file():  # a FIFO or a device: opening one waits for a writer, reading one takes its bytes
+            return None
         with open(path, "rb") as file:
             size = os.fstat(file.fileno()).st_size
             if file.read(8)[4:] not in _BMFF_FIRST_BOXES:

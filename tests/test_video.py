@@ -733,6 +733,23 @@ def test_only_an_iso_media_files_display_matrix_is_read(tmp_path):
         [None, None, None]
 
 
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs here")
+def test_a_pipes_display_matrix_is_not_read(tmp_path):
+    """A FIFO (or /dev/stdin) is not opened: opening one with no writer waited for ever (display_matrix is called on
+    every capture), and with one it took bytes from the stream."""
+    fifo = tmp_path / "stream.mp4"
+    os.mkfifo(fifo)
+    found = []
+    reading = threading.Thread(target=lambda: found.append(video_module.display_matrix(fifo)), daemon=True)
+    reading.start()
+    reading.join(2.0)
+    if reading.is_alive():  # waiting for a writer: give it one, so that the thread ends
+        os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+        reading.join(2.0)
+        pytest.fail("display_matrix waited for a writer to the FIFO")
+    assert found == [None]
+
 def _mp4_boxes(data, start=0, end=None, parents=()):
     """``(offset, type, size, parents' offsets)`` of every box of an ISO BMFF (.mp4) file, depth first."""
     end = len(data) if end is None else end

@@ -266,7 +266,9 @@ def display_matrix(path) -> tuple[int, int, int, int] | None:
     try:
         if not Path(path).is_file():  # a FIFO or a device: opening one waits for a writer, reading one takes its bytes
             return None
-        with open(path, "rb") as file:
+        # Unbuffered: a buffered read after each seek took a buffer's worth, the file system's block size (4-16 MB
+        # on a cluster's), for the few bytes of a box header.
+        with open(path, "rb", buffering=0) as file:
             size = os.fstat(file.fileno()).st_size
             if file.read(8)[4:] not in _BMFF_FIRST_BOXES:
                 return None

@@ -750,6 +750,31 @@ def test_a_pipes_display_matrix_is_not_read(tmp_path):
         pytest.fail("display_matrix waited for a writer to the FIFO")
     assert found == [None]
 
+
+@pytest.mark.skipif(not Path("/proc/self/io").exists(), reason="no per-process I/O counts here")
+def test_a_display_matrix_is_read_from_the_headers_bytes_alone(tiny_video, tmp_path):
+    """A long recording's layout (its index before 50 MB of frames, 2 MB of another track's tables in it): a few
+    hundred bytes are read, not a buffer's worth at every seek (8 kB here, a block of 4-16 MB on a cluster's file
+    system, where Python's buffer takes the file system's block size)."""
+    data = tiny_video.path.read_bytes()
+    start = data.find(b"moov") - 4
+    moov = data[start:start + int.from_bytes(data[start:start + 4], "big")]
+    tables = (8 + 2_000_000).to_bytes(4, "big") + b"free" + bytes(2_000_000)
+    path = tmp_path / "long.mp4"
+    with open(path, "wb") as file:
+        file.write(data[:int.from_bytes(data[:4], "big")])  # ftyp
+        file.write((len(moov) + len(tables)).to_bytes(4, "big") + b"moov" + tables + moov[8:])
+        file.write((8 + 50_000_000).to_bytes(4, "big") + b"mdat")
+        file.truncate(file.tell() + 50_000_000)
+
+    def read_bytes():
+        with open("/proc/self/io") as io:
+            return next(int(line.split()[1]) for line in io if line.startswith("rchar"))
+
+    before = read_bytes()
+    assert video_module.display_matrix(path) == (1, 0, 0, 1)
+    assert read_bytes() - before < 1024
+
 def _mp4_boxes(data, start=0, end=None, parents=()):
     """``(offset, type, size, parents' offsets)`` of every box of an ISO BMFF (.mp4) file, depth first."""
     end = len(data) if end is None else end

@@ -490,8 +490,7 @@ class VideoReader:
     fps_guessed : bool
     timestamps_from : int or None
         The first frame whose time (``time_s``) is the stream's own timestamp, once iteration has reached it; None
-        while every frame is within :data:`STAMP_ROUNDING_S` (and :data:`STAMP_DRIFT`, or half a frame if less) of
-        ``index / fps`` (constant frame rate). See :meth:`time_of`.
+        while the timestamps keep to ``index / fps`` (a constant frame rate; how closely: :meth:`time_of`).
     frame_count : int
         Frame count the container reports; may be approximate, and 0 when unknown.
     undecodable : list of (int, int)
@@ -551,6 +550,8 @@ class VideoReader:
         self.timestamps_from: int | None = None
         self._last_time = -math.inf
         self._stamp_offset: float | None = None
+        self._deviation: float | None = None  # the last stamped frame's stamp less its index / fps (s): _rate_varies
+        self._varied = False  # whether the rate varied in the frames skipped to the start frame
         count = self._cap.get(cv2.CAP_PROP_FRAME_COUNT)
         self.frame_count = int(count) if math.isfinite(count) and count > 0 else 0
         self.undecodable: list[tuple[int, int]] = []
@@ -571,6 +572,8 @@ class VideoReader:
                 # The first frame's stamp, less its time: times count from frame 0's (see time_of, which takes
                 # it from the start frame when no frame is skipped).
                 self._stamp_offset = self._stamp() - number / self.fps
+            if self._stamped and self._stamp() is not None:
+                self._varied = self._rate_varies(number, self._stamp() - self._stamp_offset) or self._varied
             position = number + 1
         ok, first = self._cap.retrieve() if number == self.start_frame else (False, None)
         self._first_stamp = self._stamp()
@@ -606,8 +609,9 @@ class VideoReader:
     def time_of(self, index: int, stamp: float | None = None) -> float:
         """Time in seconds of frame ``index``: ``index / fps``, or the frame's timestamp ``stamp`` (seconds, taken
         relative to the stream's frame 0, whose time is 0) from the first frame whose timestamp lies more than
-        :data:`STAMP_ROUNDING_S` plus :data:`STAMP_DRIFT` of ``index / fps`` (or half a frame, if less) from that
-        on (:attr:`timestamps_from`): a variable frame rate, as phones record in low light, where ``index / fps``
+        :data:`STAMP_ROUNDING_S` plus :data:`STAMP_DRIFT` of ``index / fps`` (or half a frame, if less) from that,
+        or moved from it by more than 3 ms (two stamps' rounding, or half a frame, if less) since the frame before
+        (:attr:`timestamps_from`, on): a variable frame rate, as phones record in low light, where ``index / fps``
         (the average rate) drifts by seconds. A constant rate's timestamps, which some containers round to
         milliseconds, and whose rate some state to a few digits only, stay within that. Times stay increasing
         whatever a stream's timestamps do."""
@@ -620,7 +624,7 @@ class VideoReader:
             stamp -= self._stamp_offset
         usable = stamp is not None and math.isfinite(stamp) and stamp > self._last_time
         if (self.timestamps_from is None and usable and self._stamped
-                and abs(stamp - nominal) > min(STAMP_ROUNDING_S + STAMP_DRIFT * nominal, 0.5 / self.fps)):
+                and (self._rate_varies(index, stamp) or self._varied)):
             self.timestamps_from = index
         if self.timestamps_from is None:
             time_s = nominal
@@ -628,6 +632,18 @@ class VideoReader:
             time_s = stamp if usable else self._last_time + 1.0 / self.fps
         self._last_time = time_s
         return time_s
+
+    def _rate_varies(self, index: int, stamp: float) -> bool:
+        """Whether frame ``index``'s timestamp ``stamp`` (seconds from frame 0's) shows a varying rate: it lies more
+        than :data:`STAMP_ROUNDING_S` plus :data:`STAMP_DRIFT` of ``index / fps`` from that, or it moved from it by
+        more than twice :data:`STAMP_ROUNDING_S` (two stamps' rounding) since the previous frame's, however long
+        the clip has run (at most half a frame either way)."""
+        nominal = index / self.fps
+        deviation = stamp - nominal
+        previous, self._deviation = self._deviation, deviation
+        half = 0.5 / self.fps
+        return (abs(deviation) > min(STAMP_ROUNDING_S + STAMP_DRIFT * nominal, half)
+                or previous is not None and abs(deviation - previous) > min(2 * STAMP_ROUNDING_S, half))
 
     def _grab_next(self, number: int) -> int | None:
         """Grab the next frame that decodes, ``number`` if none was lost since the last one: its number, or None at

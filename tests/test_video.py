@@ -976,6 +976,23 @@ def test_a_constant_rate_whose_container_states_it_roughly_keeps_index_over_fps(
     assert times == [k / reader.fps for k in range(1800)]
 
 
+def test_a_rate_that_changes_late_in_a_clip_is_timed_by_its_timestamps_at_once(tiny_video, tmp_path):
+    """30 fps for 20 s, then 24 (a phone dimming its rate in failing light): the first frame at the new rate takes
+    its timestamp, 8.3 ms after ``index / fps``. Only a stamp more than half a frame off took it there (the
+    allowance for a roughly stated rate, 0.1 % of 20 s, had grown past it): two frames 8.3 and 16.7 ms early,
+    speeds over them 1.25 times the true ones. A step of a tick of QuickTime's 1/600 s (1.7 ms, stamps of 29.97 fps
+    rounded to it) is no change of rate."""
+    with VideoReader(tiny_video.path) as reader:  # 30 fps
+        times = [reader.time_of(i, i / 30) for i in range(601)]
+        assert reader.timestamps_from is None and times[-1] == 20.0
+        assert reader.time_of(601, 20 + 1 / 24) == 20 + 1 / 24 and reader.timestamps_from == 601
+    ntsc = write_video(tmp_path / "ntsc.mp4", [np.zeros((16, 16, 3), np.uint8)] * 2, 29.97)
+    with VideoReader(ntsc) as reader:
+        assert reader.fps == 29.97
+        assert [reader.time_of(i, round(i * 600 / 29.97) / 600) for i in range(3000)][-1] == 2999 / 29.97
+        assert reader.timestamps_from is None
+
+
 @pytest.mark.parametrize("name", ["odd.mp4", "odd.avi"])
 def test_an_odd_frame_size_is_padded_not_cut(tmp_path, name):
     """4:2:0 codecs need even sizes: OpenCV wrote 641 x 479 frames as 640 x 478, dropping the last column and

@@ -737,8 +737,8 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             # An estimate reported lost for long with no search under way (no drop) is not taken as recognised
             # either, whatever the first frame's filter answers there, so that it is searched for: a static
             # background that its padding took in can answer it as well as the object did (an object fading out
-            # slowly left the estimate on that background, never searched for). Learning still follows the peak
-            # alone (see below).
+            # slowly left the estimate on that background, never searched for). Learning still follows the model's
+            # answer alone, either filter's peak (see below).
             self._lost_run = self._lost_run + 1 if match < self.lost_threshold and self.misses == 0 else 0
             recognised = answered and self._lost_run < _LONG_TERM_LOST_RUN
             self._long_term_weak = 0 if recognised or recognised_elsewhere else self._long_term_weak + 1
@@ -846,9 +846,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self.match_level += level_rate * (match - self.match_level)
         # Not where the long-term model does not recognise the estimate: the short-term models would learn what
         # the object is no longer (the 13 starts: 0.4775 against 0.4744 learning regardless, prototype). Judged on
-        # its peak alone: also refusing the frames that a long lost run counts as not recognised (see
-        # _LONG_TERM_LOST_RUN; sharp enough to learn though lost) measured 0.4865 against 0.4902 (from the box
-        # 0.5634 against 0.5909, freeman1 0.298 against 0.471).
+        # its answer alone (the first frame's filter's peak or the snapshot's): also refusing the frames that a long
+        # lost run counts as not recognised (see _LONG_TERM_LOST_RUN; sharp enough to learn though lost) measured
+        # 0.4865 against 0.4902 (from the box 0.5634 against 0.5909, freeman1 0.298 against 0.471).
         if psr >= self.psr_learn and (long_term_peak is None or answered):
             self._learnable += 1
             if self._learnable >= self.learn_every:

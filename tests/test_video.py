@@ -689,7 +689,6 @@ def test_a_phone_video_is_read_and_tracked_upright_as_players_show_it(tiny_video
     assert max(abs(r.state.rotation_deg - p.rotation_deg) for r, p in zip(results, tiny_video.poses)) < 2.0
 
 
-
 @pytest.mark.parametrize("abcd, shown", [
     ((-1, 0, 0, 1), lambda coded: coded[:, ::-1]),
     ((1, 0, 0, -1), lambda coded: coded[::-1]),
@@ -733,7 +732,6 @@ def test_only_an_iso_media_files_display_matrix_is_read(tmp_path):
         [None, None, None]
 
 
-
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs here")
 def test_a_pipes_display_matrix_is_not_read(tmp_path):
     """A FIFO (or /dev/stdin) is not opened: opening one with no writer waited for ever (display_matrix is called on
@@ -774,6 +772,7 @@ def test_a_display_matrix_is_read_from_the_headers_bytes_alone(tiny_video, tmp_p
     before = read_bytes()
     assert video_module.display_matrix(path) == (1, 0, 0, 1)
     assert read_bytes() - before < 1024
+
 
 def _mp4_boxes(data, start=0, end=None, parents=()):
     """``(offset, type, size, parents' offsets)`` of every box of an ISO BMFF (.mp4) file, depth first."""

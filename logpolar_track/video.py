@@ -572,8 +572,10 @@ class VideoReader:
                 # The first frame's stamp, less its time: times count from frame 0's (see time_of, which takes
                 # it from the start frame when no frame is skipped).
                 self._stamp_offset = self._stamp() - number / self.fps
-            if self._stamped and self._stamp() is not None:
-                self._varied = self._rate_varies(number, self._stamp() - self._stamp_offset) or self._varied
+            stamp = self._stamp()  # None where the timestamps do not time the frames
+            if stamp is not None:
+                # Called on every frame skipped, whatever it says: it follows the stamps' step from frame to frame.
+                self._varied = self._rate_varies(number, stamp - self._stamp_offset) or self._varied
             position = number + 1
         ok, first = self._cap.retrieve() if number == self.start_frame else (False, None)
         self._first_stamp = self._stamp()

@@ -253,6 +253,43 @@ def test_bench_keeps_its_figures_when_its_json_name_was_taken_or_stdout_fails(da
     assert json.loads((tmp_path / "c.json").read_text())["parameters"]["trackers"] == [oracle]
 
 
+def test_bench_still_draws_its_plot_when_its_json_cannot_be_written(dataset, oracle, tmp_path, monkeypatch):
+    # A --json name taken while the run went on stopped bench before its --plot was drawn: the plot was lost, and
+    # the one error line named only the JSON.
+    pytest.importorskip("matplotlib")
+    from logpolar_track.cli import bench as cli_bench
+
+    out, png = tmp_path / "b.json", tmp_path / "b.png"
+    real_run_bench = cli_bench.run_bench
+
+    def run_bench_while_another_writes(*args, **kwargs):
+        results = real_run_bench(*args, **kwargs)
+        out.write_text("the other run's\n")
+        return results
+
+    monkeypatch.setattr(cli_bench, "run_bench", run_bench_while_another_writes)
+    res = _run("bench", "--dataset", dataset, "--trackers", oracle, "--json", out, "--plot", png, "-q")
+    assert res.exit_code == 1
+    assert res.stderr == (f"lptrack: error: JSON output '{out}' already exists (written while this run went on); use "
+                          f"--overwrite to replace it; this run's JSON is in '{tmp_path / 'b.1.json'}'\n")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.1.json", "b.json", "b.png"]
+    # Both taken: each output's error is said, the JSON's last.
+    out.unlink()
+
+    def plot_taken(*args, **kwargs):
+        raise OutputError(f"plot '{png}' already exists (written while this run went on); use --overwrite to "
+                          f"replace it")
+
+    monkeypatch.setattr(cli_bench, "plot_curves", plot_taken)
+    res = _run("bench", "--dataset", dataset, "--trackers", oracle, "--json", out, "--plot", tmp_path / "c.png", "-q")
+    assert res.exit_code == 1
+    assert res.stderr.splitlines() == [
+        f"lptrack: error: plot '{png}' already exists (written while this run went on); use --overwrite to replace it",
+        f"lptrack: error: JSON output '{out}' already exists (written while this run went on); use --overwrite to "
+        f"replace it; this run's JSON is in '{tmp_path / 'b.2.json'}'"]
+
+
 def test_run_bench_takes_a_whole_number_of_starts(dataset):
     for starts in (1.5, True, 0, 34):
         with pytest.raises(UsageError, match=f"starts must be a whole number from 1 to 33, got {starts!r}"):

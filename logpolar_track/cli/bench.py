@@ -228,7 +228,12 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
             table += "\n" + format_paired(paired)
     if passes > 1:
         table += "\n" + format_passes(summary)
-    _emit(table, doc, json_out, overwrite)
+    json_error = None
+    try:
+        _emit(table, doc, json_out, overwrite)
+    except OutputError as exc:
+        # The plot is still drawn: a long run's figures are not lost with its JSON (the table is already out).
+        json_error = exc
     if plot_out is not None:
         # Which run a plot shows is not in its curves: say it, as the table's row names do.
         caption = f"{len(sequences)} sequence{'s' if len(sequences) != 1 else ''}"
@@ -236,9 +241,16 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
         caption += f", every {_ordinal(every)} frame" if every > 1 else ""
         caption += f", {passes} passes there and back" if passes > 1 else ""
         caption += f", means over {starts} starts" if starts > 1 else ""
-        plot_curves(summary, plot_out, caption, overwrite=overwrite)
+        try:
+            plot_curves(summary, plot_out, caption, overwrite=overwrite)
+        except OutputError as exc:
+            if json_error is None:
+                raise
+            click.echo(f"lptrack: error: {exc}", err=True)
     for r in failed:
         click.echo(f"lptrack: error: {r['tracker']} failed on {r['sequence']}: {r['error']}", err=True)
+    if json_error is not None:
+        raise json_error
     if failed:
         sys.exit(EXIT_FAILURE)
 

@@ -57,6 +57,7 @@ All metric functions are pure functions of numpy arrays.
 
 from __future__ import annotations
 
+import codecs
 import math
 import os
 import re
@@ -504,9 +505,19 @@ def read_box_text(path, *, one_based: bool | None = None, source: str | None = N
     if source is None:
         source = "vot" if name == "groundtruth.txt" else "otb" if name.startswith("groundtruth_rect") else "uav123"
     try:
-        text = path.read_text(encoding="utf-8-sig", errors="replace")
+        data = path.read_bytes()
     except OSError as exc:
         raise GroundTruthError(f"cannot read ground truth '{path}': {exc.strerror or exc}") from None
+    # UTF-8, or UTF-16 with a byte-order mark (a file saved by Windows tools). Anything else, an image given as the
+    # ground truth, was decoded with replacement characters and its bytes printed in the error line.
+    utf16 = data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)
+    try:
+        text = data.decode("utf-16" if utf16 else "utf-8-sig")
+        if "\0" in text:
+            raise UnicodeDecodeError("utf-8", data, 0, 1, "NUL")
+    except UnicodeDecodeError:
+        raise GroundTruthError(f"cannot read ground truth '{path}': not a text file (UTF-8, or UTF-16 with a "
+                               f"byte-order mark); expected one x,y,w,h or x1,y1,...,x4,y4 line per frame") from None
     rows = parse_number_lines(text, source=f"'{path}'")
     if not rows:
         raise GroundTruthError(f"ground truth '{path}' is empty; expected one x,y,w,h line per frame")

@@ -856,6 +856,12 @@ def test_eval_inputs_and_outputs(dataset, tmp_path):
     assert res.exit_code == 1 and "missing.csv" in res.stderr and len(res.stderr.splitlines()) == 1
     res = _run("eval", pred, tmp_path / "missing.txt")
     assert res.exit_code == 1 and "ground truth" in res.stderr and "does not exist" in res.stderr
+    image = tmp_path / "0001.png"  # an image given as the ground truth: one clean line, not its bytes
+    cv2.imwrite(str(image), np.zeros((8, 8), np.uint8))
+    res = _run("eval", pred, image)
+    assert res.exit_code == 1 and res.stderr == (f"lptrack: error: cannot read ground truth '{image}': not a text "
+                                                 f"file (UTF-8, or UTF-16 with a byte-order mark); expected one "
+                                                 f"x,y,w,h or x1,y1,...,x4,y4 line per frame\n")
     kept = tmp_path / "kept.json"
     kept.write_text("precious\n")
     res = _run("eval", pred, dataset / "alpha.gt.csv", "--json", kept)

@@ -283,6 +283,25 @@ def test_read_box_text_rejects_bad_lines(tmp_path):
         read_box_text(p)
 
 
+def test_read_box_text_refuses_a_binary_file_in_one_clean_line_and_reads_utf16(tmp_path):
+    # An image given as the ground truth (`lptrack eval run.csv img/0001.jpg`) was decoded with replacement
+    # characters, and its first 60 bytes, NULs and control characters included, printed in the error line.
+    jpeg = tmp_path / "0001.jpg"
+    jpeg.write_bytes(b"\xff\xd8\xff\xe0\x00\x10JFIF\x00\x01\x01\x00\x00\x01\x00\x01\x00\x00\xff\xdb\x00C\x00\x02")
+    with pytest.raises(GroundTruthError) as info:
+        read_box_text(jpeg)
+    assert str(info.value) == (f"cannot read ground truth '{jpeg}': not a text file (UTF-8, or UTF-16 with a "
+                               f"byte-order mark); expected one x,y,w,h or x1,y1,...,x4,y4 line per frame")
+    # UTF-16 without a byte-order mark: a NUL after each ASCII character.
+    (tmp_path / "nobom.txt").write_bytes("11,21,30,40\n".encode("utf-16-le"))
+    with pytest.raises(GroundTruthError, match="not a text file"):
+        read_box_text(tmp_path / "nobom.txt")
+    # With one, as Windows tools save text, it is read.
+    (tmp_path / "groundtruth_rect.txt").write_bytes("11,21,30,40\r\n12,22,30,40\r\n".encode("utf-16"))
+    gt = read_box_text(tmp_path / "groundtruth_rect.txt")
+    np.testing.assert_allclose(gt.boxes[:, :4], [[25, 40, 30, 40], [26, 41, 30, 40]])
+
+
 def test_read_gt_csv_and_run_csv(tmp_path):
     gt_path = tmp_path / "s.gt.csv"
     gt_path.write_text("frame,cx,cy,a,b,angle_deg,scale,rotation_deg\n"

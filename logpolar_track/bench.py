@@ -420,7 +420,7 @@ def _cell(value, fmt: str) -> str:
 def format_table(results: list[dict], summary: list[dict], *, speed: bool = True) -> str:
     """Plain-text table, columns aligned: one row per (sequence, tracker), then one ``mean`` row per tracker.
 
-    Rates are percentages of scored frames; errors are medians (px, %, degrees); ``n/a`` where a number is
+    Rates are percentages of scored frames (``off_tracked%`` of those reported tracked); errors are medians (px, %, degrees); ``n/a`` where a number is
     undefined (e.g. rotation for trackers or ground truth without an angle); ``fps`` (left out when ``speed``
     is False) is update()-only speed.
     """

@@ -16,6 +16,7 @@ score on a hard sequence can swing by a third between starts a few pixels apart.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import platform
@@ -161,6 +162,22 @@ def collect_sequences(datasets: Iterable, unread: list[tuple[Path, str]] | None 
                              "videos with .gt.csv sidecars, or OTB (img/ + groundtruth_rect.txt), VOT (groundtruth.txt "
                              "+ frames), UAV123 (img/ + <name>.txt) folders, or a folder of such folders")
         sequences.extend(found)
+    # A sequence given twice (`--dataset data --dataset data/toy`) is run once, as `lptrack run` runs a video named
+    # twice: it was refused as two sequences of one name, the message naming the same folder twice.
+    kept: list[Sequence] = []
+    where: dict[tuple[Path, Path], int] = {}
+    for s in sequences:
+        key = (Path(s.path).resolve(), Path(s.gt_path).resolve())
+        if key not in where:
+            where[key] = len(kept)
+            kept.append(s)
+            continue
+        first = kept[where[key]]
+        again = "twice" if str(s.path) == str(first.path) else f"again as '{s.path}'"
+        note = f"sequence '{first.path}' is given {again}; it is run once"
+        if note not in first.notes:
+            kept[where[key]] = dataclasses.replace(first, notes=(*first.notes, note))
+    sequences = kept
     names = [s.name for s in sequences]
     dupes = sorted({n for n in names if names.count(n) > 1})
     if dupes:

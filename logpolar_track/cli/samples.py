@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -33,6 +34,10 @@ def samples(out_dir: Path, only: tuple[str, ...], seed: int, quiet: bool) -> Non
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OutputError(f"cannot create output folder {out_dir}: {exc.strerror or exc}") from None
+    if not os.access(out_dir, os.W_OK | os.X_OK):
+        # Checked before minutes of rendering, as the other commands check their outputs' folders; a read-only
+        # folder was found only when the first video writer failed to open, with a traceback.
+        raise OutputError(f"cannot write the samples into '{out_dir}': the folder is not writable")
     names = [n for n in SAMPLE_NAMES if n in only] if only else list(SAMPLE_NAMES)
     show = not quiet and sys.stderr.isatty()
     scenes = []

@@ -813,6 +813,28 @@ def test_eval_to_a_stdout_that_cannot_encode_its_table_is_one_error_line(dataset
                                     "'\\u0442\\u0440\\u0435\\u043a'; set PYTHONIOENCODING=utf-8\n")
 
 
+def test_json_to_the_file_stdout_writes_to_is_json_alone(dataset, oracle, tmp_path):
+    # `--json /dev/stdout` wrote the JSON and then the table into the same stream: neither JSON nor a table.
+    pred = tmp_path / "alpha.csv"
+    _write_run_csv(pred, _TRUTH[(dataset / "alpha.roi").read_text().strip()])
+    for json_out in ("/dev/stdout", "/dev/fd/1"):
+        with open(tmp_path / "out.json", "w") as stdout:
+            proc = subprocess.run([sys.executable, "-m", "logpolar_track", "eval", str(pred),
+                                   str(dataset / "alpha.gt.csv"), "--json", json_out], stdout=stdout,
+                                  stderr=subprocess.PIPE)
+        assert proc.returncode == 0, proc.stderr
+        assert json.loads((tmp_path / "out.json").read_text())["metrics"]["frames_scored"] == N_FRAMES
+    # bench too (its table goes to stderr then), and the file stdout is redirected to, named as such.
+    with open(tmp_path / "b.json", "w") as stdout:
+        proc = subprocess.run([sys.executable, "-m", "logpolar_track", "bench", "--dataset", str(dataset),
+                               "--trackers", "cv-mil", "--json", str(tmp_path / "b.json"), "-q"], stdout=stdout,
+                              stderr=subprocess.PIPE)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads((tmp_path / "b.json").read_text())["tool"] == "lptrack bench"
+    assert b"mean (2)" in proc.stderr and sorted(p.name for p in tmp_path.iterdir()) == ["alpha.csv", "b.json",
+                                                                                         "out.json"]
+
+
 def test_eval_rejects_unreadable_prediction(dataset, tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("frame,cx\n0,1\n")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -138,6 +139,7 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
                              "--per-frame, --plot, --starts, --backwards, --every, --passes, --threads, --param, "
                              "--jobs or --scheduler")
     check_jobs_or_scheduler(jobs_given, scheduler)
+    json_out = _json_out(json_out)
     if per_frame and json_out is None:
         # It adds arrays to the JSON, and without one it was ignored in silence.
         raise UsageError("--per-frame adds per-frame arrays to the JSON; give --json PATH (or --json -) too")
@@ -261,6 +263,19 @@ def _ordinal(n: int) -> str:
     return f"{n}{suffix}"
 
 
+def _json_out(json_out: str | None) -> str | None:
+    """``json_out``, or ``'-'`` where it names the file stdout writes to (``--json /dev/stdout``, ``/dev/fd/1``, or
+    the file stdout is redirected to): the JSON then goes to stdout alone, as with ``--json -``, where the table
+    was written after it into the same stream."""
+    if json_out in (None, "-"):
+        return json_out
+    try:
+        named, stdout = os.stat(json_out), os.fstat(sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # no such file yet, or a stdout without a descriptor
+        return json_out
+    return "-" if (named.st_dev, named.st_ino) == (stdout.st_dev, stdout.st_ino) else json_out
+
+
 def _check_json_out(json_out: str | None, overwrite: bool) -> None:
     """Refuse, before any work, a closed stdout (the table goes there, or the JSON with ``--json -``) and a --json
     file that cannot be written or exists without --overwrite."""
@@ -358,6 +373,7 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, vid
     (any order) is scored too, its values checked alike, and without a
     status column it has no lost% or off_tracked% (n/a).
     """
+    json_out = _json_out(json_out)
     _check_json_out(json_out, overwrite)
     metrics, notes = evaluate_run(prediction, ground_truth, video=video)
     video = scored_video(ground_truth, video)  # for the JSON: the video evaluate_run chose a stream's rows by

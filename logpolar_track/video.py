@@ -180,7 +180,10 @@ def _check_input_path(path: Path) -> None:
         raise VideoError(f"video '{path}' not found; give the path of a video file OpenCV can read "
                          f"(e.g. .mp4, .avi, .mov) or an image sequence's pattern (e.g. frames/%04d.png)")
     if path.is_dir():
-        raise VideoError(f"'{path}' is a folder, not a video file")
+        # `lptrack frame img/` for OTB's img/0001.jpg...: say the pattern that reads them, as `lptrack run` does.
+        pattern = guess_image_sequence(path)
+        hint = f"; for its images give their pattern, e.g. '{pattern}'" if pattern is not None else ""
+        raise VideoError(f"'{path}' is a folder, not a video file{hint}")
     if not os.access(path, os.R_OK):
         raise VideoError(f"video '{path}' is not readable (permission denied)")
     if not path.is_file():

@@ -938,6 +938,14 @@ def test_a_folder_of_images_suggests_its_pattern(tmp_path):
     (tmp_path / "plain").mkdir()
     (tmp_path / "plain" / "logo.png").write_bytes(b"x")
     assert video_module.guess_image_sequence(tmp_path / "plain") is None
+    # Given to `lptrack frame`, `roi`, `sheet` or plot's --video, the folder's error says the pattern, as run's does.
+    with pytest.raises(VideoError) as info:
+        VideoReader(tmp_path / "shots")
+    assert str(info.value) == (f"'{tmp_path / 'shots'}' is a folder, not a video file; for its images give their "
+                               f"pattern, e.g. '{tmp_path / 'shots' / 'cam1_%05d.jpg'}'")
+    with pytest.raises(VideoError) as info:
+        VideoReader(tmp_path / "plain")
+    assert str(info.value) == f"'{tmp_path / 'plain'}' is a folder, not a video file"
 
 
 def test_times_follow_the_streams_timestamps_once_the_rate_varies(tiny_video):

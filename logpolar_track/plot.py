@@ -87,6 +87,12 @@ def plot_track(run, out_png, *, video=None, ground_truth=None, overwrite: bool =
     table = as_run_table(run)
     out_png = check_output_path(out_png, overwrite=overwrite, what="output image")
     gt = load_ground_truth(ground_truth) if isinstance(ground_truth, (str, os.PathLike)) else ground_truth
+    if gt is not None and not gt.valid[table.frames[table.frames < len(gt)]].any():
+        # Another video's ground truth, or one that ends before the run starts: the figure showed an empty error
+        # panel and a legend line drawn nowhere, without a word, where `lptrack eval` refuses the pair.
+        named = f"'{ground_truth}'" if isinstance(ground_truth, (str, os.PathLike)) else "the ground truth"
+        raise UsageError(f"no frame of '{table.source}' has ground truth in {named} (frames are matched by index, "
+                         f"0 = first frame)")
     thumb = read_frame(video, int(table.frames[0])) if video is not None else None
 
     import matplotlib

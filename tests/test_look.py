@@ -929,6 +929,28 @@ def test_plot_refuses_a_run_given_as_ground_truth_as_eval_does(tiny_run, tmp_pat
 
 
 @needs_matplotlib
+def test_plot_refuses_ground_truth_without_a_frame_of_the_run_as_eval_does(tiny_run, tmp_path):
+    """Ground truth that ends before the run's frames (another video's, a cut one) drew an empty error panel and a
+    legend line drawn nowhere, exit 0, without a word; `lptrack eval` refuses the pair."""
+    _, run_csv, gt = tiny_run
+    lines = gt.read_text().splitlines()
+    short = tmp_path / "short.gt.csv"
+    short.write_text("\n".join(lines[:2]) + "\n")  # frame 0 only
+    late = tmp_path / "late.csv"
+    rows = run_csv.read_text().splitlines()
+    late.write_text("\n".join([rows[0], *rows[2:]]) + "\n")  # the run from frame 1 on
+    out = tmp_path / "p.png"
+    result = invoke("plot", late, "-o", out, "--gt", short, "--no-video")
+    assert result.exit_code == 2 and result.stderr == (
+        f"lptrack: error: no frame of 'late.csv' has ground truth in '{short}' (frames are matched by index, "
+        f"0 = first frame)\n")
+    assert not out.exists()
+    assert invoke("eval", late, short).exit_code == 2  # as eval says
+    result = invoke("plot", run_csv, "-o", out, "--gt", short, "--no-video")  # one frame in common: drawn
+    assert result.exit_code == 0, result.stderr
+
+
+@needs_matplotlib
 def test_plot_finds_the_video_next_to_a_default_named_csv(tiny_run, tmp_path, monkeypatch):
     video, run_csv, _ = tiny_run
     folder = tmp_path / "here"

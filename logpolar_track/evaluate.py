@@ -689,6 +689,9 @@ class RunTable:
     status : list of str
     source : str
         File name, for messages.
+    video : str or None
+        The video the rows are of, as a batch's stream names it (its ``video`` column, the path as ``run`` was
+        given it); None for a run's own CSV, which does not name its video.
     """
 
     frames: np.ndarray
@@ -699,6 +702,7 @@ class RunTable:
     score: np.ndarray
     status: list
     source: str = "run"
+    video: str | None = None
 
     def __len__(self) -> int:
         return len(self.frames)
@@ -759,9 +763,10 @@ def same_file(name: str, video, stream=None) -> bool:
         return False
 
 
-def _one_video(path: Path, header: list[str], body: list, video, only_if_several: bool) -> tuple[list[str], list]:
+def _one_video(path: Path, header: list[str], body: list, video,
+               only_if_several: bool) -> tuple[list[str], list, str]:
     """The header and rows of one video of a batch's stream (its ``video`` column: the first, as lptrack writes
-    it, or another tool's anywhere), without that column: the one whose name is the file ``video``, or the only
+    it, or another tool's anywhere), without that column, and that video's name in the column: the one whose name is the file ``video``, or the only
     one (whatever its name if ``only_if_several``). Its videos' frame numbers overlap, so one video's rows are
     read, never all of them (eval scored them all against the first one's ground truth)."""
     k = header.index(VIDEO_COLUMN)
@@ -772,7 +777,8 @@ def _one_video(path: Path, header: list[str], body: list, video, only_if_several
     if chosen is None:
         raise several_videos(path, names, video)
     return (header[:k] + header[k + 1:],
-            [(line, row[:k] + row[k + 1:]) for line, row in body if len(row) > k and row[k].strip() == chosen])
+            [(line, row[:k] + row[k + 1:]) for line, row in body if len(row) > k and row[k].strip() == chosen],
+            chosen)
 
 
 #: The columns of a run CSV that hold a number in every row, and the columns among them that must be > 0.
@@ -822,8 +828,9 @@ def read_run_csv(path, video=None, *, other_tools: bool = False, only_if_several
     if other_tools:
         hint += f" (or another tool's CSV with at least the columns {','.join(OTHER_TOOLS_COLUMNS)})"
     header, body = read_data_file(path, "run CSV", hint)
+    streamed = None
     if header[:1] == [VIDEO_COLUMN] or (other_tools and VIDEO_COLUMN in header):
-        header, body = _one_video(path, header, body, video, only_if_several)
+        header, body, streamed = _one_video(path, header, body, video, only_if_several)
     if not header:
         raise GroundTruthError(f"run CSV '{path}' is empty; {hint}")
     lenient = False  # another tool's file: its optional columns may be empty (NaN), its statuses absent
@@ -893,7 +900,7 @@ def read_run_csv(path, video=None, *, other_tools: bool = False, only_if_several
         t["scale"] = np.where(np.isnan(t["scale"]), size / size[0], t["scale"])
     return RunTable(np.asarray(table["frame"], int), t["time_s"],
                     np.column_stack([t["cx"], t["cy"], t["a"], t["b"], t["angle_deg"]]), t["scale"],
-                    t["rotation_deg"], t["score"], table["status"], path.name)
+                    t["rotation_deg"], t["score"], table["status"], path.name, video=streamed)
 
 
 def as_run_table(run) -> RunTable:

@@ -89,6 +89,22 @@ def find_video_for_csv(csv_path, folders: Sequence = (".",)) -> Path | None:
     return None
 
 
+def find_streamed_video(name: str | None, stream) -> Path | None:
+    """The video a batch's stream names for its rows (``name``, its ``video`` column, the path as ``lptrack run`` was
+    given it), found from the current folder or, where it is relative, from the folder of the file ``stream``
+    (the run may have been started there); None if it is not found (or ``name`` is None)."""
+    if not name:
+        return None
+    given = Path(name)
+    places = [given]
+    if not given.is_absolute() and str(stream) != "-":
+        places.append(Path(stream).parent / given)
+    for place in places:
+        if place.is_file() or (is_image_sequence(place) and place.parent.is_dir()):
+            return place
+    return None
+
+
 def describe_video_search(csv_path, folders: Sequence = (".",)) -> str:
     """Where :func:`find_video_for_csv` looked for the video of ``csv_path`` and why it took none, as a phrase
     for a message (``no clip.mp4 (or .avi, ...) in 'runs' or the current folder``)."""

@@ -751,6 +751,40 @@ def test_a_streams_video_names_are_found_from_the_folder_of_the_stream_too(tiny_
     assert sheet.exit_code == 0, sheet.stderr
 
 
+def test_plot_takes_the_thumbnail_from_the_video_a_stream_names(tiny_run, tmp_path, monkeypatch):
+    """A batch's stream names its video in its 'video' column; plot looked for '<stream name>.mp4' instead and drew
+    no thumbnail ("no all.mp4 ... in the current folder") for a video the stream names."""
+    pytest.importorskip("matplotlib")
+    video, run_csv, _ = tiny_run
+    (tmp_path / "vids").mkdir()
+    (tmp_path / "runs").mkdir()
+    shutil.copy(video.path, tmp_path / "vids/tiny.mp4")
+    header, *rows = run_csv.read_text().splitlines()
+    stream = tmp_path / "runs/all.csv"
+    stream.write_text("\n".join(["video," + header] + [f"../vids/tiny.mp4,{r}" for r in rows]) + "\n")
+    monkeypatch.chdir(tmp_path)
+    given = invoke("plot", "runs/all.csv", "--video", "vids/tiny.mp4", "-o", "given.png")
+    assert given.exit_code == 0, given.stderr
+    result = invoke("plot", "runs/all.csv", "-o", "streamed.png")  # named from the stream's folder
+    assert result.exit_code == 0, result.stderr
+    assert result.stderr == ("lptrack: thumbnail from 'runs/../vids/tiny.mp4', the stream's video (give --video to "
+                             "choose another)\n")
+    assert Path("streamed.png").read_bytes() == Path("given.png").read_bytes()
+    monkeypatch.chdir(tmp_path / "runs")  # named from the current folder, and from stdin
+    result = CliRunner().invoke(main, ["plot", "-", "-o", "stdin.png"], input=stream.read_text())
+    assert result.exit_code == 0, result.stderr
+    assert result.stderr == ("lptrack: thumbnail from '../vids/tiny.mp4', the stream's video (give --video to choose "
+                             "another)\n")
+    given = CliRunner().invoke(main, ["plot", "-", "--video", "../vids/tiny.mp4", "-o", "given.png"],
+                               input=stream.read_text())
+    assert given.exit_code == 0 and Path("stdin.png").read_bytes() == Path("given.png").read_bytes()
+    monkeypatch.chdir(tmp_path)  # a name found nowhere: the note says so
+    result = CliRunner().invoke(main, ["plot", "-", "-o", "none.png"], input=stream.read_text())
+    assert result.exit_code == 0 and result.stderr == (
+        "lptrack: note: no thumbnail: the stream's video '../vids/tiny.mp4' is not found; give the tracked video "
+        "with --video VIDEO (or --no-video for blank axes)\n")
+
+
 def test_a_number_option_given_text_says_a_whole_number_is_wanted(tiny_run):
     video, run_csv, _ = tiny_run
     result = invoke("sheet", video.path, run_csv, "--count", "x")

@@ -18,7 +18,7 @@ from ..evaluate import read_run_csv
 from ..frame_png import write_frame_png
 from ..geometry import check_roi_fits
 from ..outputs import check_image_suffix
-from ..pipeline import describe_video_search, find_video_for_csv
+from ..pipeline import describe_video_search, find_streamed_video, find_video_for_csv
 from ..plot import PLOT_SUFFIXES, matplotlib_hint, plot_track
 from ..roi_fit import (ROUND_TOLERANCE, from_one_based, read_mask, roi_from_box, roi_from_mask, roi_from_points,
                        roi_from_quad)
@@ -167,7 +167,8 @@ The run CSV does not name its video: the thumbnail comes from --video, or
 from <stem>.mp4 (.m4v, .mov, .avi, .mkv, .webm, ...), or a folder <stem>/
 of numbered images, when exactly one such source sits next to the CSV (or
 in the current folder), where <stem> is the CSV's name without .lptrack.csv
-(.lptrack.jsonl, .csv). A note on stderr says which video was taken, or
+(.lptrack.jsonl, .csv). A batch's stream names its video (its 'video'
+column): that one, when found from here or from the stream's folder. A note on stderr says which video was taken, or
 where none was found. --no-video draws the path on blank axes. RUN.csv '-'
 reads the run from stdin (then give -o).
 
@@ -210,16 +211,25 @@ def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path 
     out_png = _default_png(run_csv, out_png, "plot")
     table = read_run_csv(run_csv, video, only_if_several=True)  # --video is also the thumbnail's, a copy or not
     note = None
-    if video is None and not no_video and str(run_csv) == "-":
-        note = ("lptrack: note: no thumbnail: the run came from stdin; give the tracked video with --video VIDEO (or "
-                "--no-video for blank axes)")
+    streamed = find_streamed_video(table.video, run_csv) if video is None and not no_video else None
+    if streamed is not None:
+        # A batch's stream names its video (the plain CSV does not): it was looked for by the stream's file name.
+        video = streamed
+        note = f"lptrack: thumbnail from '{video}', the stream's video (give --video to choose another)"
+    elif video is None and not no_video and str(run_csv) == "-":
+        why = "the run came from stdin" if table.video is None else f"the stream's video '{table.video}' is not found"
+        note = (f"lptrack: note: no thumbnail: {why}; give the tracked video with --video VIDEO (or --no-video for "
+                f"blank axes)")
     elif video is None and not no_video:
         video = find_video_for_csv(run_csv)
         if video is not None:
             note = f"lptrack: thumbnail from '{video}' (give --video to choose another)"
         else:
-            note = (f"lptrack: note: no thumbnail: {describe_video_search(run_csv)}; give the tracked video with "
-                    f"--video VIDEO (or --no-video for blank axes)")
+            why = describe_video_search(run_csv)
+            if table.video is not None:
+                why = f"the stream's video '{table.video}' is not found from here or beside the stream, and {why}"
+            note = (f"lptrack: note: no thumbnail: {why}; give the tracked video with --video VIDEO (or --no-video "
+                    f"for blank axes)")
     path = plot_track(table, out_png, video=video, ground_truth=gt_path, overwrite=overwrite)
     if note is not None and not quiet:
         click.echo(note, err=True)  # after the plot, so that a failure is one error line, not a note before it

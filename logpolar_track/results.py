@@ -27,6 +27,7 @@ empty fields as ``null``.
 
 from __future__ import annotations
 
+import codecs
 import contextlib
 import csv
 import errno
@@ -183,17 +184,22 @@ def read_data_rows(path) -> tuple[list[str], list[tuple[int, list[str]]]]:
     Raises
     ------
     OSError, UnicodeDecodeError
-        The file cannot be read as UTF-8 text.
+        The file cannot be read as UTF-8 text (or UTF-16 with a byte-order mark).
     ValueError
         A JSON line is not an object; the message gives its line number.
     """
     if str(path) == "-":  # a pipe: lptrack run clip.mp4 --csv - | lptrack eval - clip.gt.csv
         if sys.stdin is None:
             raise OSError(errno.EBADF, "stdin is closed")
-        text = sys.stdin.buffer.read().decode("utf-8-sig")
+        data = sys.stdin.buffer.read()
     else:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            text = fh.read()
+        with open(path, "rb") as fh:
+            data = fh.read()
+    # UTF-8, or UTF-16 with a byte-order mark (what Windows tools save as "Unicode text"), as ground truth is read.
+    utf16 = data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)
+    text = data.decode("utf-16" if utf16 else "utf-8-sig")
+    if "\0" in text:  # a binary file that happens to decode
+        raise UnicodeDecodeError("utf-8", data, 0, 1, "NUL")
     if not text.lstrip().startswith("{"):
         rows = [(n, r) for n, r in enumerate(csv.reader(io.StringIO(text)), start=1) if any(f.strip() for f in r)]
         if not rows:

@@ -302,6 +302,26 @@ def test_read_box_text_refuses_a_binary_file_in_one_clean_line_and_reads_utf16(t
     np.testing.assert_allclose(gt.boxes[:, :4], [[25, 40, 30, 40], [26, 41, 30, 40]])
 
 
+def test_a_run_csv_saved_as_utf16_is_read_and_a_binary_one_refused(tmp_path):
+    # A run's CSV re-saved by a Windows tool as "Unicode text" (UTF-16 with a byte-order mark) was "not a text
+    # file" for eval, plot and sheet, while a .roi file or ground truth so saved is read.
+    text = ("frame,time_s,cx,cy,a,b,angle_deg,scale,rotation_deg,score,status\r\n"
+            "0,0.000000,50.000,40.000,20.000,10.000,30.000,1.00000,0.000,1.0000,init\r\n"
+            "1,0.040000,51.000,40.000,20.000,10.000,31.000,1.00000,1.000,0.9000,tracked\r\n")
+    utf8, utf16 = tmp_path / "a.csv", tmp_path / "b.csv"
+    utf8.write_text(text, newline="")
+    utf16.write_bytes(text.encode("utf-16"))
+    a, b = read_run_csv(utf8), read_run_csv(utf16)
+    assert b.frames.tolist() == a.frames.tolist() == [0, 1] and b.status == a.status
+    np.testing.assert_array_equal(b.ellipses, a.ellipses)
+    binary = tmp_path / "c.csv"
+    binary.write_bytes(b"frame\x00\x01\x02")
+    with pytest.raises(GroundTruthError) as info:
+        read_run_csv(binary)
+    assert str(info.value) == (f"cannot read run CSV '{binary}': not a text file (UTF-8, or UTF-16 with a "
+                               f"byte-order mark)")
+
+
 def test_read_gt_csv_and_run_csv(tmp_path):
     gt_path = tmp_path / "s.gt.csv"
     gt_path.write_text("frame,cx,cy,a,b,angle_deg,scale,rotation_deg\n"

@@ -437,9 +437,9 @@ def _cell(value, fmt: str) -> str:
 def format_table(results: list[dict], summary: list[dict], *, speed: bool = True) -> str:
     """Plain-text table, columns aligned: one row per (sequence, tracker), then one ``mean`` row per tracker.
 
-    Rates are percentages of scored frames (``off_tracked%`` of those reported tracked); errors are medians (px, %, degrees); ``n/a`` where a number is
-    undefined (e.g. rotation for trackers or ground truth without an angle); ``fps`` (left out when ``speed``
-    is False) is update()-only speed.
+    Rates are percentages of scored frames (``off_tracked%`` of those reported tracked); errors are medians (px,
+    %, degrees); ``n/a`` where a number is undefined (e.g. rotation for trackers or ground truth without an
+    angle); ``fps`` (left out when ``speed`` is False) is update()-only speed.
     """
     columns = _COLUMNS if speed else tuple(c for c in _COLUMNS if c[1] != "fps")
     header = ["sequence", "tracker"] + [c[0] for c in columns]

@@ -767,9 +767,10 @@ def same_file(name: str, video, stream=None) -> bool:
 def _one_video(path: Path, header: list[str], body: list, video,
                only_if_several: bool) -> tuple[list[str], list, str]:
     """The header and rows of one video of a batch's stream (its ``video`` column: the first, as lptrack writes
-    it, or another tool's anywhere), without that column, and that video's name in the column: the one whose name is the file ``video``, or the only
-    one (whatever its name if ``only_if_several``). Its videos' frame numbers overlap, so one video's rows are
-    read, never all of them (eval scored them all against the first one's ground truth)."""
+    it, or another tool's anywhere), without that column, and that video's name in the column: the one whose
+    name is the file ``video``, or the only one (whatever its name if ``only_if_several``). Its videos' frame
+    numbers overlap, so one video's rows are read, never all of them (eval scored them all against the first
+    one's ground truth)."""
     k = header.index(VIDEO_COLUMN)
     names = list(dict.fromkeys(row[k].strip() for _, row in body if len(row) > k))
     chosen = names[0] if len(names) == 1 and (video is None or only_if_several) else None

@@ -169,8 +169,9 @@ of numbered images, when exactly one such source sits next to the CSV (or
 in the current folder), where <stem> is the CSV's name without .lptrack.csv
 (.lptrack.jsonl, .csv). A batch's stream names its video (its 'video'
 column): that one, when found from here or from the stream's folder. A
-note on stderr says which video was taken, or where none was found. --no-video draws the path on blank axes. RUN.csv '-'
-reads the run from stdin (then give -o).
+note on stderr says which video was taken, or where none was found.
+--no-video draws the path on blank axes. RUN.csv '-' reads the run from
+stdin (then give -o).
 
 \b
 Examples:

@@ -267,7 +267,7 @@ def _json_out(json_out: str | None) -> str | None:
     """``json_out``, or ``'-'`` where it names the file stdout writes to (``--json /dev/stdout``, ``/dev/fd/1``, or
     the file stdout is redirected to): the JSON then goes to stdout alone, as with ``--json -``, where the table
     was written after it into the same stream."""
-    if json_out in (None, "-"):
+    if json_out in (None, "-") or os.path.realpath(json_out) == os.devnull:  # `--json /dev/null > /dev/null`: quiet
         return json_out
     try:
         named, stdout = os.stat(json_out), os.fstat(sys.stdout.fileno())

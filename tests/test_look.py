@@ -785,6 +785,15 @@ def test_plot_takes_the_thumbnail_from_the_video_a_stream_names(tiny_run, tmp_pa
         "with --video VIDEO (or --no-video for blank axes)\n")
 
 
+def test_sheet_given_its_two_files_the_other_way_round_says_so(tiny_run, tmp_path):
+    video, run_csv, _ = tiny_run
+    result = invoke("sheet", run_csv, video.path, "-o", tmp_path / "s.png")
+    assert result.exit_code == 2 and result.stderr == (
+        f"lptrack: error: RUN.csv '{video.path}' is a video and VIDEO '{run_csv}' a run's file; the video goes "
+        f"first: lptrack sheet VIDEO RUN.csv\n")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_number_option_given_text_says_a_whole_number_is_wanted(tiny_run):
     video, run_csv, _ = tiny_run
     result = invoke("sheet", video.path, run_csv, "--count", "x")

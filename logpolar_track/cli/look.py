@@ -22,7 +22,7 @@ from ..pipeline import describe_video_search, find_streamed_video, find_video_fo
 from ..plot import PLOT_SUFFIXES, matplotlib_hint, plot_track
 from ..roi_fit import (ROUND_TOLERANCE, from_one_based, read_mask, roi_from_box, roi_from_mask, roi_from_points,
                        roi_from_quad)
-from ..video import input_label, read_frame
+from ..video import VIDEO_EXTENSIONS, input_label, read_frame
 from . import (FrameRate, OneLineErrors, PathParam, TimeParam, WholeNumber, main, parse_roi_option, require_stdout,
                write_stdout)
 
@@ -269,6 +269,10 @@ def sheet(video: Path, run_csv: Path, out_png: Path | None, cols: int, rows: int
     if rows is not None and count is not None:
         raise UsageError(f"--rows and --count contradict each other: --rows {rows} shows {cols} x {rows} frames, "
                          f"--count {count} shows {count} frames in {cols} columns; give one of them")
+    if run_csv.suffix.lower() in VIDEO_EXTENSIONS and video.suffix.lower() in (".csv", ".jsonl"):
+        # The two the other way round were "cannot read run CSV 'clip.mp4': not a text file".
+        raise UsageError(f"RUN.csv '{run_csv}' is a video and VIDEO '{video}' a run's file; the video goes first: "
+                         f"lptrack sheet VIDEO RUN.csv")
     out_png = _default_png(run_csv, out_png, "sheet")
     table = read_run_csv(run_csv, video, only_if_several=True)  # VIDEO is what to draw on, a copy or not
     path = write_contact_sheet(video, table, out_png, cols=cols, rows=rows, count=count, width=width,

@@ -12,7 +12,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from .draw import LABEL_FONT, LOST_COLOUR, TRACKED_COLOUR, draw_state, put_label
+from .draw import LABEL_FONT, LOST_COLOUR, TRACKED_COLOUR, draw_state, put_label, signed
 from .errors import UsageError
 from .evaluate import as_run_table
 from .outputs import check_image_suffix, check_output_path, write_png
@@ -141,7 +141,7 @@ def _tile(frame: np.ndarray, result: FrameResult, tile_w: int, tile_h: int, labe
     cell[:tile_h, -1] = 32  # a dark 1-px gutter between tiles
     colour = LOST_COLOUR if result.status == "lost" else TRACKED_COLOUR
     s = result.state
-    rot = "" if s.rotation_deg is None else f" r{s.rotation_deg:+.0f}"
+    rot = "" if s.rotation_deg is None else f" r{signed(s.rotation_deg, 0)}"
     text = f"frame {result.frame} {result.time_s:.2f}s x{s.scale:.2f}{rot} {s.score:.2f}"
     if result.status == "lost":
         text += " LOST"

@@ -44,12 +44,17 @@ def _fixed(value: float) -> int:
     return int(round(min(max(scaled, -_LIMIT), _LIMIT)))
 
 
+def signed(value: float, decimals: int) -> str:
+    """``value`` with a sign and fixed ``decimals``; a value that rounds to zero is ``+0``, never ``-0``."""
+    return f"{round(value, decimals) + 0.0:+.{decimals}f}"
+
+
 def readout_text(state: TrackState, *, frame_index: int | None = None, status: str = "tracked") -> str:
     """The one-line readout drawn on a frame: frame, scale, rotation (deg CCW), score, and LOST if lost."""
     parts = [] if frame_index is None else [f"frame {frame_index}"]
     parts.append(f"scale {state.scale:.3f}")
     if state.rotation_deg is not None:
-        parts.append(f"rot {state.rotation_deg:+.1f} deg")
+        parts.append(f"rot {signed(state.rotation_deg, 1)} deg")
     parts.append(f"score {state.score:.2f}")
     if status == "lost":
         parts.append("LOST")

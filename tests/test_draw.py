@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from logpolar_track.draw import LOST_COLOUR, TRACKED_COLOUR, draw_state, readout_text
+from logpolar_track.draw import LOST_COLOUR, TRACKED_COLOUR, draw_state, readout_text, signed
 from logpolar_track.errors import UsageError
 from logpolar_track.geometry import Ellipse
 from logpolar_track.trackers import TrackState
@@ -83,6 +83,14 @@ def test_readout_text():
     assert readout_text(state, frame_index=12) == "frame 12  scale 1.235  rot -45.0 deg  score 0.88"
     no_rotation = TrackState(Ellipse(0, 0, 1, 1), 1.0, None, 0.1)
     assert readout_text(no_rotation, status="lost") == "scale 1.000  score 0.10  LOST"
+
+
+def test_readout_never_shows_minus_zero():
+    # A rotation of a few hundredths of a degree below zero, as a tracker at rest reports, reads as no turn.
+    for tiny in (-0.04, -0.0):
+        state = TrackState(Ellipse(0, 0, 1, 1), 1.0, tiny, 0.5)
+        assert readout_text(state) == "scale 1.000  rot +0.0 deg  score 0.50"
+    assert signed(-0.4, 0) == "+0" and signed(-0.6, 0) == "-1" and signed(0.06, 1) == "+0.1"
 
 
 def test_grey_frame_and_state_far_off_frame():

@@ -30,7 +30,7 @@ from . import __version__
 from .datasets import SEARCH_DEPTH, Sequence, discover, discover_one, load_ground_truth
 from .errors import OutputError, RoiError, UsageError, is_whole
 from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
-                       auc, read_track_csv, score_track, success_curve)
+                       auc, read_run_csv, score_track, success_curve)
 from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_threads, run_tasks
 from .geometry import Ellipse
 from .outputs import check_image_suffix, written_into_place
@@ -751,13 +751,18 @@ def evaluate_run(prediction, ground_truth, *, video=None) -> tuple[dict, list[st
     prediction, ground_truth = Path(prediction), Path(ground_truth)
     _check_argument_order(prediction, ground_truth)
     scored = scored_video(ground_truth, video)
-    track = read_track_csv(prediction, scored, only_if_several=video is None)
+    table = read_run_csv(prediction, scored, other_tools=True, only_if_several=video is None)
+    track = table.track()
     gt = load_ground_truth(ground_truth)
     metrics = score_track(gt, track)
     if metrics["frames_scored"] == 0:
         raise UsageError(f"no frame of '{prediction}' has ground truth in '{ground_truth}' (frames are matched "
                          "by index, 0 = first frame)")
     notes = []
+    if video is not None and table.video is None:
+        # Said, not refused: the run's own CSV is what was meant. Ignored in silence, a mistyped name went unnoticed.
+        notes.append(f"--video '{video}' is ignored: '{prediction}' is one video's run (it has no 'video' column); "
+                     f"--video chooses among the videos of a batch's stream")
     if metrics["frames_missing"]:
         total = metrics["frames_scored"] + metrics["frames_missing"]
         notes.append(f"'{prediction}' has no row for {metrics['frames_missing']} of the {total} frames with ground "

@@ -706,6 +706,11 @@ def test_eval_scores_one_video_of_a_batch_stream(tiny_run, tmp_path, monkeypatch
         "choose one with --video VIDEO, or give one video's run (its own CSV, as --out-dir writes them)\n")
     elsewhere = invoke("eval", "all.csv", "tiny.gt.csv", "--video", "other.mp4")
     assert elsewhere.exit_code == 1 and "none of them is 'other.mp4'; give one video's run" in elsewhere.stderr
+    # One video's own CSV has no choice to make: --video is said to be ignored (a mistyped name went unnoticed).
+    own = invoke("eval", str(run_csv), str(gt), "--video", "other.mp4")
+    assert own.exit_code == 0 and own.stdout == alone.stdout
+    assert own.stderr == (f"lptrack: note: --video 'other.mp4' is ignored: '{run_csv}' is one video's run (it has no "
+                          f"'video' column); --video chooses among the videos of a batch's stream\n")
 
 
 def test_eval_plot_and_sheet_read_the_run_from_stdin_as_dash(tiny_run, tmp_path, monkeypatch):

@@ -965,6 +965,20 @@ def test_an_object_back_at_its_first_angle_is_found_whatever_angle_the_estimate_
     assert abs(results[-1][1].rotation_deg) < 2.0
 
 
+@pytest.mark.parametrize("seed", [1, 4, 10])
+def test_an_object_lost_during_a_drop_is_searched_for_by_the_long_term_model_too(seed):
+    """As above (the disc turns 50 degrees while it fades out, and comes back at its first angle), where the fade
+    makes a sudden drop: the short-term search then looks for the disc as it last looked, turned, and the long-term
+    model's search, at the first frame's angle, did not start while that search was under way (the frames of a drop
+    were not counted as lost by ``_LONG_TERM_LOST_RUN``): found 20 and 21 frames after it was back (seeds 1 and 4)
+    and not at all (seed 10). Counted now, it is found within 5 frames, and nothing is reported tracked while it is
+    away."""
+    roi, frames = _faded_out_and_back(seed, turn_deg=50.0)
+    _, results = run(frames, roi)
+    found = _found_back(results, 5)
+    assert found is not None and found - 65 <= 10
+
+
 def test_a_frame_the_long_term_model_does_not_recognise_is_not_learnt():
     """Where the first frame's filter answers the estimate below ``_LONG_TERM_WEAK`` (and so does the snapshot of a
     later appearance, where there is one: see ``_SNAPSHOT_PSR``), the frame is not learnt, even

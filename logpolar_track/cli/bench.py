@@ -357,8 +357,9 @@ def _free_name(path: Path) -> Path:
               help="With a batch's stream (PRED.csv from 'lptrack run a.mp4 b.mp4 --csv -'): score the rows of "
                    "this video. Default: GT when GT is a video.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing --json file.")
+@click.option("--quiet", "-q", is_flag=True, help="No notes on stderr (frames not scored, an ignored --video).")
 def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, video: Path | None,
-                 overwrite: bool) -> None:
+                 overwrite: bool, quiet: bool) -> None:
     """Score a run's CSV (PRED.csv from 'lptrack run'; '-': stdin) against ground truth GT.
 
     GT is a <name>.gt.csv, an OTB groundtruth_rect.txt, a VOT groundtruth.txt,
@@ -377,7 +378,7 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, vid
     _check_json_out(json_out, overwrite)
     metrics, notes = evaluate_run(prediction, ground_truth, video=video)
     video = scored_video(ground_truth, video)  # for the JSON: the video evaluate_run chose a stream's rows by
-    for note in notes:
+    for note in [] if quiet else notes:
         click.echo(f"lptrack: note: {note}", err=True)
     row = {"sequence": prediction.name, "tracker": "(csv)", **metrics}
     table = format_table([row], [], speed=False)

@@ -748,6 +748,13 @@ def evaluate_run(prediction, ground_truth, *, video=None) -> tuple[dict, list[st
     GroundTruthError, InputError
         A file that cannot be read as what it is given as.
     """
+    metrics, notes, _ = evaluate_stream_run(prediction, ground_truth, video=video)
+    return metrics, notes
+
+
+def evaluate_stream_run(prediction, ground_truth, *, video=None) -> tuple[dict, list[str], str | None]:
+    """:func:`evaluate_run`, and the name of the video whose rows were scored as the run's ``video`` column
+    gives it (None for one video's own CSV, which has no such column: ``video`` was then not used)."""
     prediction, ground_truth = Path(prediction), Path(ground_truth)
     _check_argument_order(prediction, ground_truth)
     scored = scored_video(ground_truth, video)
@@ -773,7 +780,7 @@ def evaluate_run(prediction, ground_truth, *, video=None) -> tuple[dict, list[st
         notes.append(f"{beyond} of the {len(track.frames)} rows of '{prediction}' {'lies' if beyond == 1 else 'lie'} "
                      f"past the end of '{ground_truth}' ({len(gt)} frames); they are not scored (is it this video's "
                      f"ground truth?)")
-    return metrics, notes
+    return metrics, notes, table.video
 
 
 def scored_video(ground_truth, video=None):

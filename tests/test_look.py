@@ -712,6 +712,9 @@ def test_eval_scores_one_video_of_a_batch_stream(tiny_run, tmp_path, monkeypatch
     assert own.stderr == (f"lptrack: note: --video 'other.mp4' is ignored: '{run_csv}' is one video's run (it has no "
                           f"'video' column); --video chooses among the videos of a batch's stream\n")
     assert invoke("eval", str(run_csv), str(gt), "--video", "other.mp4", "-q").stderr == ""  # notes only; rows kept
+    # ... and its JSON does not name the ignored --video as the video whose rows were scored.
+    doc = json.loads(invoke("eval", str(run_csv), str(gt), "--video", "other.mp4", "--json", "-").stdout)
+    assert "video" not in doc
 
 
 def test_eval_plot_and_sheet_read_the_run_from_stdin_as_dash(tiny_run, tmp_path, monkeypatch):

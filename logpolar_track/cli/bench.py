@@ -9,7 +9,7 @@ from pathlib import Path
 
 import click
 
-from ..bench import (STARTS, bench_document, collect_sequences, default_dataset, eval_document, evaluate_run,
+from ..bench import (STARTS, bench_document, collect_sequences, default_dataset, eval_document, evaluate_stream_run,
                      format_paired, format_passes, format_table, paired_differences, plot_curves, resolve_trackers,
                      run_bench, scored_video, summarise)
 from ..errors import OutputError, UsageError
@@ -376,8 +376,9 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, vid
     """
     json_out = _json_out(json_out)
     _check_json_out(json_out, overwrite)
-    metrics, notes = evaluate_run(prediction, ground_truth, video=video)
-    video = scored_video(ground_truth, video)  # for the JSON: the video evaluate_run chose a stream's rows by
+    metrics, notes, streamed = evaluate_stream_run(prediction, ground_truth, video=video)
+    # For the JSON: the video evaluate_run chose a stream's rows by; not a --video it ignored (one video's own CSV).
+    video = None if video is not None and streamed is None else scored_video(ground_truth, video)
     for note in [] if quiet else notes:
         click.echo(f"lptrack: note: {note}", err=True)
     row = {"sequence": prediction.name, "tracker": "(csv)", **metrics}

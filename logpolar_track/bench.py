@@ -34,6 +34,7 @@ from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCE
 from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_threads, run_tasks
 from .geometry import Ellipse
 from .outputs import check_image_suffix, written_into_place
+from .results import decode_text
 from .plot import PLOT_SUFFIXES, matplotlib_hint
 from .trackers import create_tracker, tracker_class, tracker_names
 from .video import VIDEO_EXTENSIONS
@@ -807,8 +808,8 @@ def _check_argument_order(prediction: Path, ground_truth: Path) -> None:
 def _first_line(path: Path) -> str:
     """The first line of a text file, or '' if it cannot be read as text (its reader then says what is wrong)."""
     try:
-        with open(path, encoding="utf-8-sig", errors="strict") as fh:
-            return fh.readline(65536).strip()
+        # UTF-8, or UTF-16 with a byte-order mark, as the run CSV's reader reads it (it reads it whole too).
+        return decode_text(path.read_bytes()).partition("\n")[0].strip()
     except (OSError, UnicodeDecodeError):
         return ""
 

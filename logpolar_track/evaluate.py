@@ -57,7 +57,6 @@ All metric functions are pure functions of numpy arrays.
 
 from __future__ import annotations
 
-import codecs
 import math
 import os
 import re
@@ -69,7 +68,7 @@ import numpy as np
 
 from .errors import GroundTruthError, UsageError, is_real
 from .geometry import Ellipse, ellipse_in_rotated_rect, parse_number
-from .results import COLUMNS, VIDEO_COLUMN, FrameResult, off_contract, read_data_rows
+from .results import COLUMNS, VIDEO_COLUMN, FrameResult, decode_text, off_contract, read_data_rows
 from .trackers.base import TrackState
 
 #: IoU thresholds of the OTB success plot.
@@ -510,11 +509,8 @@ def read_box_text(path, *, one_based: bool | None = None, source: str | None = N
         raise GroundTruthError(f"cannot read ground truth '{path}': {exc.strerror or exc}") from None
     # UTF-8, or UTF-16 with a byte-order mark (a file saved by Windows tools). Anything else, an image given as the
     # ground truth, was decoded with replacement characters and its bytes printed in the error line.
-    utf16 = data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)
     try:
-        text = data.decode("utf-16" if utf16 else "utf-8-sig")
-        if "\0" in text:
-            raise UnicodeDecodeError("utf-8", data, 0, 1, "NUL")
+        text = decode_text(data)
     except UnicodeDecodeError:
         raise GroundTruthError(f"cannot read ground truth '{path}': not a text file (UTF-8, or UTF-16 with a "
                                f"byte-order mark); expected one x,y,w,h or x1,y1,...,x4,y4 line per frame") from None

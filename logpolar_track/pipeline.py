@@ -9,7 +9,6 @@ was made from (:func:`find_video_for_csv`).
 
 from __future__ import annotations
 
-import codecs
 import math
 import os
 import sys
@@ -25,7 +24,7 @@ from .errors import LptrackError, OutputError, RoiError, UsageError
 from .executor import TRACKING_OPENCV_THREADS, opencv_threads
 from .geometry import ROI_SYNTAX, Ellipse, as_ellipse, check_roi_fits, parse_roi
 from .images import within_0_255
-from .results import CsvWriter, FrameResult
+from .results import CsvWriter, FrameResult, decode_text
 from .trackers import DEFAULT_TRACKER, Tracker, create_tracker
 from .outputs import check_output_path, writes_in_place
 from .video import (CODECS_BY_EXTENSION, VIDEO_EXTENSIONS, VideoReader, VideoWriter, check_frame_number,
@@ -161,12 +160,8 @@ def read_roi_text(path) -> str:
         data = path.read_bytes()
     except OSError as exc:
         raise LptrackError(f"cannot read ROI file '{path}': {exc.strerror or exc}") from None
-    encoding = "utf-16" if data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE) else "utf-8-sig"
     try:
-        text = data.decode(encoding)
-        if "\0" in text:  # UTF-16 without a byte-order mark decodes as UTF-8 with a NUL after each ASCII letter
-            raise UnicodeDecodeError(encoding, data, 0, 1, "NUL")
-        return text
+        return decode_text(data)
     except UnicodeDecodeError:
         raise LptrackError(f"cannot read ROI file '{path}': it is not text in UTF-8 (nor UTF-16 with a byte-order "
                            f"mark); save it as UTF-8") from None

@@ -167,6 +167,23 @@ def json_line(fields: list[str], *, video: str | None = None) -> str:
     return json.dumps(record, separators=(",", ":")) + "\n"
 
 
+def decode_text(data: bytes) -> str:
+    """``data`` as text: UTF-8 (with or without a byte-order mark), or UTF-16 with a byte-order mark (what Windows
+    tools save as "Unicode text", PowerShell 5's ``>`` among them). Run CSVs, ground truth and ROI files are read so.
+
+    Raises
+    ------
+    UnicodeDecodeError
+        Neither, or text holding a NUL: a binary file that happens to decode, or UTF-16 without a byte-order mark
+        (a NUL after each ASCII character).
+    """
+    encoding = "utf-16" if data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE) else "utf-8-sig"
+    text = data.decode(encoding)
+    if "\0" in text:
+        raise UnicodeDecodeError(encoding, data, 0, 1, "NUL")
+    return text
+
+
 def read_data_rows(path) -> tuple[list[str], list[tuple[int, list[str]]]]:
     """The header and the rows of a run's data file, as :class:`CsvWriter` writes it in either format.
 
@@ -195,11 +212,7 @@ def read_data_rows(path) -> tuple[list[str], list[tuple[int, list[str]]]]:
     else:
         with open(path, "rb") as fh:
             data = fh.read()
-    # UTF-8, or UTF-16 with a byte-order mark (what Windows tools save as "Unicode text"), as ground truth is read.
-    utf16 = data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)
-    text = data.decode("utf-16" if utf16 else "utf-8-sig")
-    if "\0" in text:  # a binary file that happens to decode
-        raise UnicodeDecodeError("utf-8", data, 0, 1, "NUL")
+    text = decode_text(data)
     if not text.lstrip().startswith("{"):
         rows = [(n, r) for n, r in enumerate(csv.reader(io.StringIO(text)), start=1) if any(f.strip() for f in r)]
         if not rows:

@@ -790,6 +790,11 @@ def test_evaluate_run_is_what_eval_does_from_python(dataset, tmp_path):
     assert notes == [f"'{pred}' has no row for 2 of the {N_FRAMES} frames with ground truth; they are not scored"]
     with pytest.raises(UsageError, match="is ground truth \\(a .gt.csv\\), not a run; the run's CSV goes first"):
         evaluate_run(dataset / "alpha.gt.csv", pred)
+    # A run saved as UTF-16 (read as a run since it may be) given as the ground truth is said to be a run too.
+    utf16 = tmp_path / "alpha16.csv"
+    utf16.write_bytes(pred.read_text().encode("utf-16"))
+    with pytest.raises(UsageError, match="is an lptrack run .*; the run's CSV goes first"):
+        evaluate_run(pred, utf16)
     # A batch's stream against a video's ground truth: that video's rows, as eval scores them (the choice was the
     # CLI's alone, so evaluate_run refused the stream).
     stream = tmp_path / "all.csv"

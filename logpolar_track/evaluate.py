@@ -746,6 +746,16 @@ def several_videos(path, names: list[str], video=None) -> GroundTruthError:
                             f"column); {what} (its own CSV, as --out-dir writes them)")
 
 
+def stream_name_places(name: str, stream=None) -> list[Path]:
+    """Where a batch stream's ``video`` value ``name`` (the path as the run was given it) may be: from the current
+    folder, and, where it is relative, from the folder of the file ``stream`` it came from (the run may have been
+    started there; not for a stream read from stdin, ``'-'``)."""
+    given = Path(name)
+    if given.is_absolute() or stream is None or str(stream) == "-":
+        return [given]
+    return [given, Path(stream).parent / given]
+
+
 def same_file(name: str, video, stream=None) -> bool:
     """Whether ``name`` (a batch stream's ``video`` value, the path as the run was given it) names the file
     ``video``: the same path, or two paths to one file, ``name`` taken from the current folder or, where it is
@@ -753,7 +763,7 @@ def same_file(name: str, video, stream=None) -> bool:
     a, b = Path(name), Path(video)
     if a == b:
         return True
-    places = [a] if a.is_absolute() or stream is None or str(stream) == "-" else [a, Path(stream).parent / a]
+    places = stream_name_places(name, stream)
     try:
         return b.exists() and any(place.exists() and place.samefile(b) for place in places)
     except OSError:

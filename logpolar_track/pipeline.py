@@ -22,6 +22,7 @@ import numpy as np
 from .draw import draw_state
 from .errors import LptrackError, OutputError, RoiError, UsageError
 from .executor import TRACKING_OPENCV_THREADS, opencv_threads
+from .evaluate import stream_name_places
 from .geometry import ROI_SYNTAX, Ellipse, as_ellipse, check_roi_fits, parse_roi
 from .images import within_0_255
 from .results import CsvWriter, FrameResult, decode_text
@@ -94,11 +95,7 @@ def find_streamed_video(name: str | None, stream) -> Path | None:
     (the run may have been started there); None if it is not found (or ``name`` is None)."""
     if not name:
         return None
-    given = Path(name)
-    places = [given]
-    if not given.is_absolute() and str(stream) != "-":
-        places.append(Path(stream).parent / given)
-    for place in places:
+    for place in stream_name_places(name, stream):
         if place.is_file() or (is_image_sequence(place) and place.parent.is_dir()):
             return place
     return None

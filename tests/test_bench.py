@@ -840,6 +840,14 @@ def test_json_to_the_file_stdout_writes_to_is_json_alone(dataset, oracle, tmp_pa
                                                                                          "out.json"]
 
 
+@pytest.mark.skipif(os.devnull != "/dev/null", reason="POSIX /dev/null")
+def test_bench_json_to_dev_null_with_stdout_to_dev_null_stays_quiet(dataset):
+    # /dev/null is also the file stdout writes to: taken as --json -, the table went to stderr.
+    proc = subprocess.run([sys.executable, "-m", "logpolar_track", "bench", "--dataset", str(dataset), "--trackers",
+                           "cv-mil", "--json", os.devnull, "-q"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    assert (proc.returncode, proc.stderr) == (0, b"")
+
+
 def test_eval_rejects_unreadable_prediction(dataset, tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("frame,cx\n0,1\n")

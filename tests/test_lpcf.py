@@ -971,8 +971,8 @@ def test_an_object_lost_during_a_drop_is_searched_for_by_the_long_term_model_too
     makes a sudden drop: the short-term search then looks for the disc as it last looked, turned, and the long-term
     model's search, at the first frame's angle, did not start while that search was under way (the frames of a drop
     were not counted as lost by ``_LONG_TERM_LOST_RUN``): found 20 and 21 frames after it was back (seeds 1 and 4)
-    and not at all (seed 10). Counted now, it is found within 5 frames, and nothing is reported tracked while it is
-    away."""
+    and not at all (seed 10). Counted now, it is found within 5 frames (65, 69 and 70; asserted within 10, for margin),
+    and nothing is reported tracked while it is away."""
     roi, frames = _faded_out_and_back(seed, turn_deg=50.0)
     _, results = run(frames, roi)
     found = _found_back(results, 5)

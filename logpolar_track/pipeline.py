@@ -29,7 +29,8 @@ from .results import CsvWriter, FrameResult, decode_text
 from .trackers import DEFAULT_TRACKER, Tracker, create_tracker
 from .outputs import check_output_path, writes_in_place
 from .video import (CODECS_BY_EXTENSION, VIDEO_EXTENSIONS, VideoReader, VideoWriter, check_frame_number,
-                    frames_to_track, guess_image_sequence, is_image_sequence, video_stem)
+                    frames_to_track, guess_image_sequence, image_sequence_files, is_image_sequence,
+                    video_stem)
 
 #: Suffixes appended to the video's stem for the default output names.
 VIDEO_OUT_SUFFIX = ".lptrack.mp4"
@@ -96,7 +97,8 @@ def find_streamed_video(name: str | None, stream) -> Path | None:
     if not name:
         return None
     for place in stream_name_places(name, stream):
-        if place.is_file() or (is_image_sequence(place) and place.parent.is_dir()):
+        # An image-sequence pattern is taken only with images to read, as find_video_for_csv takes a folder.
+        if place.is_file() or (is_image_sequence(place) and image_sequence_files(place)):
             return place
     return None
 

@@ -792,6 +792,11 @@ def test_plot_takes_the_thumbnail_from_the_video_a_stream_names(tiny_run, tmp_pa
     assert result.exit_code == 0 and result.stderr == (
         "lptrack: note: no thumbnail: the stream's video '../vids/tiny.mp4' is not found; give the tracked video "
         "with --video VIDEO (or --no-video for blank axes)\n")
+    # A pattern whose folder holds no images is not found either (it was taken, and plot failed on it, exit 1).
+    (tmp_path / "img").mkdir()
+    pattern = stream.read_text().replace("../vids/tiny.mp4", "img/%04d.jpg")
+    result = CliRunner().invoke(main, ["plot", "-", "-o", "none2.png"], input=pattern)
+    assert result.exit_code == 0 and "the stream's video 'img/%04d.jpg' is not found" in result.stderr
 
 
 def test_sheet_given_its_two_files_the_other_way_round_says_so(tiny_run, tmp_path):

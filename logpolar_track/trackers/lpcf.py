@@ -738,8 +738,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             # recognised either, whatever the first frame's filter answers there, so that it is searched for: a static
             # background that its padding took in can answer it as well as the object did (an object fading out
             # slowly left the estimate on that background, never searched for). Learning still follows the model's
-            # answer alone, either filter's peak (see below). The frames of a drop count too, while its short-term
-            # search, which looks for the object as it last looked, finds nothing (see _LONG_TERM_LOST_RUN).
+            # answer alone, either filter's peak (see below). The frames after a drop count too, every one until
+            # tracking resumes (all reported lost): its short-term search looks for the object as it last looked
+            # (see _LONG_TERM_LOST_RUN).
             self._lost_run = self._lost_run + 1 if match < self.lost_threshold or self.misses > 0 else 0
             recognised = answered and self._lost_run < _LONG_TERM_LOST_RUN
             self._long_term_weak = 0 if recognised or recognised_elsewhere else self._long_term_weak + 1

@@ -226,14 +226,7 @@ def test_bench_keeps_its_figures_when_its_json_name_was_taken_or_stdout_fails(da
     from logpolar_track.cli import bench as cli_bench
 
     out = tmp_path / "b.json"
-    real_run_bench = cli_bench.run_bench
-
-    def run_bench_while_another_writes(*args, **kwargs):
-        results = real_run_bench(*args, **kwargs)
-        out.write_text("the other run's\n")
-        return results
-
-    monkeypatch.setattr(cli_bench, "run_bench", run_bench_while_another_writes)
+    real_run_bench = _another_run_writes(out, monkeypatch)
     res = _run("bench", "--dataset", dataset, "--trackers", oracle, "--json", out, "-q")
     assert res.exit_code == 1
     assert res.stderr == (f"lptrack: error: JSON output '{out}' already exists (written while this run went on); use "
@@ -253,13 +246,11 @@ def test_bench_keeps_its_figures_when_its_json_name_was_taken_or_stdout_fails(da
     assert json.loads((tmp_path / "c.json").read_text())["parameters"]["trackers"] == [oracle]
 
 
-def test_bench_still_draws_its_plot_when_its_json_cannot_be_written(dataset, oracle, tmp_path, monkeypatch):
-    # A --json name taken while the run went on stopped bench before its --plot was drawn: the plot was lost, and
-    # the one error line named only the JSON.
-    pytest.importorskip("matplotlib")
+def _another_run_writes(out, monkeypatch):
+    """Make ``lptrack bench`` find its --json name ``out`` taken (another run's JSON written) once its runs are done;
+    returns the real ``run_bench``."""
     from logpolar_track.cli import bench as cli_bench
 
-    out, png = tmp_path / "b.json", tmp_path / "b.png"
     real_run_bench = cli_bench.run_bench
 
     def run_bench_while_another_writes(*args, **kwargs):
@@ -268,6 +259,17 @@ def test_bench_still_draws_its_plot_when_its_json_cannot_be_written(dataset, ora
         return results
 
     monkeypatch.setattr(cli_bench, "run_bench", run_bench_while_another_writes)
+    return real_run_bench
+
+
+def test_bench_still_draws_its_plot_when_its_json_cannot_be_written(dataset, oracle, tmp_path, monkeypatch):
+    # A --json name taken while the run went on stopped bench before its --plot was drawn: the plot was lost, and
+    # the one error line named only the JSON.
+    pytest.importorskip("matplotlib")
+    from logpolar_track.cli import bench as cli_bench
+
+    out, png = tmp_path / "b.json", tmp_path / "b.png"
+    _another_run_writes(out, monkeypatch)
     res = _run("bench", "--dataset", dataset, "--trackers", oracle, "--json", out, "--plot", png, "-q")
     assert res.exit_code == 1
     assert res.stderr == (f"lptrack: error: JSON output '{out}' already exists (written while this run went on); use "

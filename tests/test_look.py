@@ -715,6 +715,8 @@ def test_eval_scores_one_video_of_a_batch_stream(tiny_run, tmp_path, monkeypatch
     # ... and its JSON does not name the ignored --video as the video whose rows were scored.
     doc = json.loads(invoke("eval", str(run_csv), str(gt), "--video", "other.mp4", "--json", "-").stdout)
     assert "video" not in doc
+    # Nor the video given as GT (its .gt.csv beside it): no stream's rows were chosen by it.
+    assert "video" not in json.loads(invoke("eval", str(run_csv), "tiny.mp4", "--json", "-").stdout)
 
 
 def test_eval_plot_and_sheet_read_the_run_from_stdin_as_dash(tiny_run, tmp_path, monkeypatch):

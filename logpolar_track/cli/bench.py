@@ -377,8 +377,9 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, vid
     json_out = _json_out(json_out)
     _check_json_out(json_out, overwrite)
     metrics, notes, streamed = evaluate_stream_run(prediction, ground_truth, video=video)
-    # For the JSON: the video evaluate_run chose a stream's rows by; not a --video it ignored (one video's own CSV).
-    video = None if video is not None and streamed is None else scored_video(ground_truth, video)
+    # For the JSON: the video evaluate_run chose a stream's rows by; none for one video's own CSV (a --video it
+    # ignored, or the video given as GT, chose nothing).
+    video = None if streamed is None else scored_video(ground_truth, video)
     for note in [] if quiet else notes:
         click.echo(f"lptrack: note: {note}", err=True)
     row = {"sequence": prediction.name, "tracker": "(csv)", **metrics}

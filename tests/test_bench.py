@@ -606,6 +606,12 @@ def test_bench_notes_ground_truth_out_of_step_with_its_images(tmp_path):
     assert res.exit_code == 2 and res.stdout == ""
     assert res.stderr.splitlines() == ["lptrack: error: --every 100 leaves 1 frame of 'walk-every100', nothing to "
                                        "track; give a smaller N"]
+    # Beside a sequence long enough, the short one is skipped with a note: it stopped the whole run.
+    _otb_folder(tmp_path, "long", [Pose(60.0 + 2 * i, 70.0, 1.0, 0.0) for i in range(12)], roi)
+    res = _run("bench", "--dataset", tmp_path, "--trackers", "fixed", "--every", "10")
+    assert res.exit_code == 0, res.stderr
+    assert "lptrack: note: skipped 'walk-every10': --every 10 leaves it 1 frame, nothing to track" in res.stderr
+    assert "long-every10" in res.stdout and "walk-every10" not in res.stdout
 
 
 def test_bench_finds_sample_videos_below_others_and_says_which_lack_ground_truth(dataset, tmp_path):

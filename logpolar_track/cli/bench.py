@@ -173,17 +173,21 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     if backwards:
         sequences = [s.backwards() for s in sequences]
     sequences = [s.every(every).there_and_back(passes) for s in sequences]
-    # A video's frame count is its container's, 0 when unknown: then nothing is said before the run.
-    short = next((s for s in sequences if s.n_frames == 1), None) if every > 1 else None
-    if short is not None:
-        raise UsageError(f"--every {every} leaves {short.n_frames} frame of '{short.name}', nothing to track; give "
-                         f"a smaller N")
+    # A video's frame count is its container's, 0 when unknown: then nothing is said before the run. A sequence left
+    # a single frame is skipped with a note, as a folder without a sequence is (one short sequence stopped the run
+    # of every other); only when that leaves none is it an error.
+    short = [s for s in sequences if s.n_frames == 1] if every > 1 else []
+    if short and len(short) == len(sequences):
+        raise UsageError(f"--every {every} leaves {short[0].n_frames} frame of '{short[0].name}', nothing to track; "
+                         f"give a smaller N")
+    sequences = [s for s in sequences if s.n_frames != 1 or every == 1]
     _note_skipped(skipped, quiet)
     if not quiet:
         folder_notes = [f"skipped '{folder}', which has {lacking}" for folder, lacking in unread[:_SKIPPED_NOTES]]
         if len(unread) > _SKIPPED_NOTES:
             folder_notes.append(f"skipped {len(unread) - _SKIPPED_NOTES} more folders that hold frames, videos or "
                                 f"ground truth but are not sequences")
+        folder_notes += [f"skipped '{s.name}': --every {every} leaves it 1 frame, nothing to track" for s in short]
         for note in [*folder_notes, *dict.fromkeys(note for s in sequences for note in s.notes)]:
             click.echo(f"lptrack: note: {note}", err=True)
     threads = TRACKING_OPENCV_THREADS if threads is None else threads

@@ -30,7 +30,7 @@ from . import __version__
 from .datasets import SEARCH_DEPTH, Sequence, discover, discover_one, load_ground_truth
 from .errors import OutputError, RoiError, UsageError, is_whole
 from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
-                       auc, read_run_csv, score_track, success_curve)
+                       auc, no_frame_with_ground_truth, read_run_csv, score_track, success_curve)
 from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_threads, run_tasks
 from .geometry import Ellipse
 from .outputs import check_image_suffix, written_into_place
@@ -764,8 +764,7 @@ def evaluate_stream_run(prediction, ground_truth, *, video=None) -> tuple[dict, 
     gt = load_ground_truth(ground_truth)
     metrics = score_track(gt, track)
     if metrics["frames_scored"] == 0:
-        raise UsageError(f"no frame of '{prediction}' has ground truth in '{ground_truth}' (frames are matched "
-                         "by index, 0 = first frame)")
+        raise no_frame_with_ground_truth(f"'{prediction}'", f"'{ground_truth}'")
     notes = []
     if video is not None and table.video is None:
         # Said, not refused: the run's own CSV is what was meant. Ignored in silence, a mistyped name went unnoticed.

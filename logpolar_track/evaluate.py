@@ -733,6 +733,13 @@ class RunTable:
                    np.array([r.state.score for r in results], float), [r.status for r in results], source)
 
 
+def no_frame_with_ground_truth(run: str, ground_truth: str) -> UsageError:
+    """The error for a run none of whose frames has ground truth (another video's, or one that ends before the run
+    starts): ``run`` and ``ground_truth`` as the message names them (quoted paths, say)."""
+    return UsageError(f"no frame of {run} has ground truth in {ground_truth} (frames are matched by index, 0 = first "
+                      f"frame)")
+
+
 def several_videos(path, names: list[str], video=None) -> GroundTruthError:
     """The error for a batch's stream (a ``video`` column) of ``names`` where one video's run is needed: several,
     or none of them ``video`` if that was given."""

@@ -19,7 +19,7 @@ import numpy as np
 
 from .datasets import load_ground_truth
 from .errors import UsageError
-from .evaluate import as_run_table, rotation_errors, scale_errors, score_track
+from .evaluate import as_run_table, no_frame_with_ground_truth, rotation_errors, scale_errors, score_track
 from .geometry import Ellipse
 from .outputs import check_image_suffix, check_output_path, written_into_place
 from .video import read_frame
@@ -91,8 +91,7 @@ def plot_track(run, out_png, *, video=None, ground_truth=None, overwrite: bool =
         # Another video's ground truth, or one that ends before the run starts: the figure showed an empty error
         # panel and a legend line drawn nowhere, without a word, where `lptrack eval` refuses the pair.
         named = f"'{ground_truth}'" if isinstance(ground_truth, (str, os.PathLike)) else "the ground truth"
-        raise UsageError(f"no frame of '{table.source}' has ground truth in {named} (frames are matched by index, "
-                         f"0 = first frame)")
+        raise no_frame_with_ground_truth(f"'{table.source}'", named)
     thumb = read_frame(video, int(table.frames[0])) if video is not None else None
 
     import matplotlib

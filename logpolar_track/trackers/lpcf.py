@@ -1186,6 +1186,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             searches.append((self._snapshot, self._snapshot_coarse, max(_LONG_TERM_GAIN * here, self.psr_learn),
                              poses))
         found, found_psr = None, 0.0
+        maps: dict = {}  # the frame's feature maps, shared by the filters searching the same pose
         for parts, coarse, least_psr, poses in searches:
             for k, (scale, angle, height_needed) in enumerate(poses):
                 self._search_part = part  # every pose searches the same part of the frame
@@ -1195,7 +1196,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
                 # _LOCAL_LIGHT_SIGMA; at every size: 13 starts 0.5014 against 0.5023, the shadows' figures the same,
                 # at about 5 % more time a frame).
                 centres, relit = self._frame_candidates(frame, pose, _SEARCH_CANDIDATES, long_term=True,
-                                                        local_light=k == 0, coarse=coarse)
+                                                        local_light=k == 0, coarse=coarse, maps=maps)
                 # Within reach of the estimate, or of the last place reported tracked at the speed it had then: an
                 # estimate left on an occluder or the background stands still while the object goes on.
                 near = (self._within_reach(centres, cursor, self._long_term_weak)
@@ -1222,7 +1223,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         return self._translate(frame, found)
 
     def _frame_candidates(self, frame, pose: Similarity, count: int, long_term: bool = False,
-                          local_light: bool = False, coarse: CoarseFilter | None = None
+                          local_light: bool = False, coarse: CoarseFilter | None = None, maps: dict | None = None
                           ) -> tuple[np.ndarray, np.ndarray]:
         """Centres (pixels, ``(n, 2)``, strongest first, n <= ``count``; with ``local_light`` up to ``count`` more
         after them) of the strongest local maxima of the filter's response over the frame, with the filter
@@ -1240,6 +1241,9 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         the correlation was made channel by channel with ``cv2.filter2D``, two to three times less since; a part of
         a 4K frame 30-60 ms then. Sweeping the frame with patches of the filter's size, two a frame at 0.25 ms
         each, found 14 of 24 objects coming back into view, against 24 now.)
+
+        ``maps``, a dict kept by the caller over one frame, holds the feature maps made, by pose and part, so that
+        filters searching the same pose and part share them.
         """
         width, height = self.frame_size
         t = math.radians(self._axes_deg(pose))
@@ -1274,15 +1278,21 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         self._search_part += 1
         self._search_parts = len(order)
         centre = Similarity(float(xs[index]), float(ys[index]), 2 * pose.scale, pose.rotation_deg, 0.0)
-        # The anti-aliasing blur follows the map's spacing, and the crop blurred for it is not the patches' (see
-        # _patch): put back the tracker's own scale and forget the crop afterwards.
-        blur_scale, self._blur_scale = self._blur_scale, centre.scale
-        try:
-            # Outside the frame the map mirrors it: on a turned map, a constant there makes a strong straight edge
-            # across the map, which the filter took for the object (settling on background by the frame's edge).
-            features = patch_features(self._patch(frame, centre, (part_w, part_h), cv2.BORDER_REFLECT_101))
-        finally:
-            self._blur_scale, self._blur_cache = blur_scale, None
+        maps = {} if maps is None else maps
+        key = (pose.scale, pose.rotation_deg, float(xs[index]), float(ys[index]), part_w, part_h)
+        if key not in maps:
+            # The anti-aliasing blur follows the map's spacing, and the crop blurred for it is not the patches'
+            # (see _patch): put back the tracker's own scale afterwards.
+            blur_scale, self._blur_scale = self._blur_scale, centre.scale
+            try:
+                # Outside the frame the map mirrors it: on a turned map, a constant there makes a strong straight
+                # edge across the map, which the filter took for the object (settling on background by the edge).
+                maps[key] = patch_features(self._patch(frame, centre, (part_w, part_h), cv2.BORDER_REFLECT_101))
+            finally:
+                self._blur_scale = blur_scale
+        # The next patch blurs a crop of its own, whether or not the map was made now (the same samples either way).
+        self._blur_cache = None
+        features = maps[key]
         def strongest_places(maps: np.ndarray) -> np.ndarray:
             response = coarse.response(maps)
             rows, cols = np.nonzero(response == cv2.dilate(response, np.ones((5, 5), np.uint8)))
@@ -1299,7 +1309,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         # it would in the light and is not among the strongest places (a walker into a building's shade, x0.3:
         # its place ranked about 3600th); on features normalised to their neighbourhood it is.
         sigma = _LOCAL_LIGHT_SIGMA * min(kernel_h, kernel_w)
-        more = strongest_places(locally_normalised(features, sigma, _LOCAL_LIGHT_FLOOR))
+        relit_key = key + (sigma,)
+        if relit_key not in maps:
+            maps[relit_key] = locally_normalised(features, sigma, _LOCAL_LIGHT_FLOOR)
+        more = strongest_places(maps[relit_key])
         more = more[np.array([np.min(np.hypot(*(places - xy).T), initial=np.inf) > 2 * spacing for xy in more], bool)]
         return np.concatenate([places, more]), np.arange(len(places) + len(more)) >= len(places)
 

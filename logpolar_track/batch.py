@@ -808,10 +808,19 @@ class BatchProgress:
         self.skipped += status == "skipped"
 
 
-def _count_frames_in_background(jobs: Sequence[VideoJob], progress: BatchProgress) -> threading.Event:
+#: Seconds the end of a batch waits for its frame-counting thread to leave the container it is reading.
+_COUNTING_JOIN_SECONDS = 10.0
+
+
+def _count_frames_in_background(jobs: Sequence[VideoJob], progress: BatchProgress) -> Callable[[], None]:
     """Read every job's announced frame count into ``progress`` in a daemon thread, in the order the jobs
-    run; set the returned event to stop it early. In the background because opening thousands of containers
-    (on a network file system, say) would otherwise hold up the start of the batch."""
+    run; call the returned function to stop it (it waits for the container being read, if any). In the
+    background because opening thousands of containers (on a network file system, say) would otherwise hold up
+    the start of the batch.
+
+    The thread is waited for, not left behind: one still inside OpenCV when the interpreter exits aborts the
+    process ("terminate called without an active exception", exit 134), which a batch whose videos all fail at
+    once (missing files) did more often than not."""
     stop = threading.Event()
 
     def count() -> None:
@@ -823,8 +832,15 @@ def _count_frames_in_background(jobs: Sequence[VideoJob], progress: BatchProgres
             except Exception:  # noqa: BLE001 - a count is only a display's estimate; the video fails on its own
                 pass
 
-    threading.Thread(target=count, name="lptrack-frame-counts", daemon=True).start()
-    return stop
+    thread = threading.Thread(target=count, name="lptrack-frame-counts", daemon=True)
+    thread.start()
+
+    def stop_and_wait() -> None:
+        stop.set()
+        # Bounded: a container on a network file system that never answers must not hold up the end of the batch.
+        thread.join(_COUNTING_JOIN_SECONDS)
+
+    return stop_and_wait
 
 
 def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str] | None = None,
@@ -918,7 +934,7 @@ def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str]
             stream.flush()
     finally:
         if stop_counting is not None:
-            stop_counting.set()
+            stop_counting()
         # Failed and interrupted videos leave no outputs, nor folders made only for them (the others' folders
         # hold their outputs, so are not empty).
         remove_empty_folders({p for job in plan.jobs for p in plan.output_folders(job)} - existing)

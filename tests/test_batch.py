@@ -231,6 +231,29 @@ def test_batch_progress_totals_frames_and_estimates_unknown_counts():
     assert (progress.ok, progress.failed, progress.skipped, progress.videos_done) == (2, 1, 1, 4)
 
 
+def test_a_batch_waits_for_its_frame_counting_thread(work, monkeypatch):
+    # The thread reading the containers' frame counts was left running when a batch ended; one still inside OpenCV
+    # as the interpreter exits aborts the process ('terminate called without an active exception', exit 134 instead
+    # of 1): 'lptrack run a.mp4 b.mp4' with both missing, stderr to a log, did so more often than not.
+    import threading
+
+    from logpolar_track import batch
+
+    counted = []
+
+    def slow_count(job):
+        time.sleep(0.5)  # a container slow to open, while the videos fail at once
+        counted.append(job.label)
+        return None
+
+    monkeypatch.setattr(batch, "announced_job_frames", slow_count)
+    result = invoke("missing1.mp4", "missing2.mp4", "--roi", "10,10,5", "--no-video", "--jobs", "1")
+    assert result.exit_code == 1
+    assert "lptrack: 2 videos: 0 ok, 2 failed;" in result.stderr
+    assert not [t for t in threading.enumerate() if t.name == "lptrack-frame-counts"]
+    assert counted  # it was stopped after the container it was reading, not abandoned inside it
+
+
 def test_announced_job_frames_follow_start_frame_and_frames(work):
     def job(path, **options):
         [one] = plan_batch(find_videos([path]), roi=Ellipse.circle(80, 60, 20), out_dir="out", **options).jobs

@@ -503,6 +503,36 @@ def test_standard_input_closed_or_holding_a_video_is_said_so(monkeypatch):
     assert len(find_videos(["-"], stdin=io.StringIO(listing))) == 2
 
 
+def test_a_shell_glob_over_an_image_sequence_is_refused_not_tracked_image_by_image(work):
+    # 'lptrack run shots/*.png' (the pattern unquoted, or a glob for it): every image became a video of one frame,
+    # one CSV of a single row each, exit 0.
+    shots = work / "shots"
+    shots.mkdir()
+    capture = cv2.VideoCapture(str(work / "footage/day1/a.mp4"))
+    for number in range(1, 5):
+        ok, frame = capture.read()
+        assert ok
+        cv2.imwrite(str(shots / f"frame_{number:04d}.png"), frame)
+    capture.release()
+    images = sorted(f"shots/{p.name}" for p in shots.iterdir())
+    result = invoke(*images, "--roi", "80,60,20", "--no-video", "--out-dir", "out")
+    assert result.exit_code == 2
+    assert result.stderr == ("lptrack: error: 'shots/frame_0001.png' and 3 other inputs are still images, each of "
+                             "which would be tracked as a video of one frame; give an image sequence as its images' "
+                             "pattern, quoted so that the shell leaves it alone, e.g. 'shots/frame_%04d.png'\n")
+    assert not (work / "out").exists()
+    listed = invoke("-", "--roi", "80,60,20", "--no-video", "--out-dir", "out", stdin="\n".join(images) + "\n")
+    assert listed.exit_code == 2 and "are still images" in listed.stderr
+    # The pattern itself runs, beside a video too.
+    result = invoke("shots/frame_%04d.png", "footage/day1/a.mp4", "--roi", "80,60,20", "--no-video", "--out-dir",
+                    "out", "-q")
+    assert result.exit_code == 0, result.stderr
+    assert len(csv_rows(work / "out/shots/frame.lptrack.csv")) == 4
+    # Images among videos (a list from find -type f) do not stop the others, as any input that is no video.
+    mixed = invoke(*images[:2], "footage/day1/a.mp4", "--roi", "80,60,20", "--no-video", "--out-dir", "out2", "-q")
+    assert mixed.exit_code == 0, mixed.stderr
+
+
 def test_a_shell_glob_does_not_track_lptracks_own_videos_beside_their_sources(tmp_path):
     """``lptrack run *.mp4`` in a folder already run named clip.lptrack.mp4 too: tracked again, it wrote
     clip.lptrack.lptrack.mp4, one more each run. Named beside its source it is skipped, with a note; alone, or

@@ -27,7 +27,8 @@ from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..trackers.base import did_you_mean
 from ..outputs import make_output_folder, remove_empty_folders
-from ..video import VideoReader, check_fps, guess_image_sequence, input_label, read_frame
+from ..video import (IMAGE_EXTENSIONS, VideoReader, check_fps, guess_image_sequence, input_label, is_image_sequence,
+                     read_frame)
 from . import (EXIT_FAILURE, PARAM_HELP, FrameRate, OneLineErrors, PathParam, TimeParam, WholeNumber,
                check_jobs_or_scheduler, echo_progress, main, parse_param_options, parse_roi_option,
                stdout_reader_left)
@@ -281,6 +282,7 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
             click.echo(f"lptrack: note: skipping '{link}': {why}", err=True)
 
     inputs = find_videos(videos, on_duplicate=named_again, on_own_output=own_output, on_link_passed=link_passed)
+    _refuse_still_images(inputs)
     if videos and not inputs:
         folders = [Path(v) for v in videos if v != "-" and Path(v).is_dir()]
         why = ""
@@ -307,6 +309,21 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
         remove_empty_folders(created)
     if summary.failed:
         sys.exit(EXIT_FAILURE)
+
+
+def _refuse_still_images(inputs) -> None:
+    """Refuse inputs that are all still images, several of them: a shell's glob over an image sequence (``lptrack
+    run shots/*.png``, the pattern unquoted or written as a glob) made each image a video of one frame, as many CSVs
+    of one row each, and exit 0. (Among videos, as in a list from ``find -type f``, each is tracked as ever: one
+    input never stops the others.)"""
+    stills = [video.path for video in inputs
+              if video.path.suffix.lower() in IMAGE_EXTENSIONS and not is_image_sequence(video.path)]
+    if len(stills) < 2 or len(stills) < len(inputs):
+        return
+    pattern = guess_image_sequence(stills[0].parent) or stills[0].parent / "frame_%04d.png"
+    raise UsageError(f"'{stills[0]}' and {counted(len(stills) - 1, 'other input')} are still images, each of which "
+                     f"would be tracked as a video of one frame; give an image sequence as its images' pattern, "
+                     f"quoted so that the shell leaves it alone, e.g. '{pattern}'")
 
 
 def _check_out_dir(out_dir: Path | None, *, video_out: Path | None, csv_out: str | None, no_video: bool,

@@ -451,8 +451,12 @@ def check_outputs(video_path: Path, video_out, csv_out, overwrite: bool) -> None
         planned.append((Path(csv_out), "output CSV"))
     inputs = [(video_path, "the input video")]
     inputs += [(roi, "the input's ROI file") for roi in roi_sidecar_paths(video_path)]
-    # --skip-existing keeps outputs in files; the rows on stdout are none (so it is refused with --csv -).
-    keep_hint = "" if str(csv_out) == "-" else " (or --skip-existing to keep a video's outputs and track the others)"
+    # --skip-existing keeps outputs in files; the rows on stdout are none (so it is refused with --csv -). It keeps
+    # an output only if this video wrote it: the same name is also what a video of that name in another folder takes
+    # (a list split by xargs without --parents), which --skip-existing would skip as done, or replace.
+    keep_hint = ("" if str(csv_out) == "-" else
+                 " (or --skip-existing to keep it if this video wrote it; videos of one name from several folders "
+                 "need --parents)")
     for out, what in planned:
         check_output_path(out, overwrite=overwrite, what=what, special_ok=what == "output CSV", keep_hint=keep_hint)
         for source, name in inputs:

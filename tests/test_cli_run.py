@@ -243,6 +243,26 @@ def test_existing_output_is_not_overwritten_without_flag(tiny_video, workdir):
     assert (workdir / "tiny.lptrack.csv").read_text().startswith(HEADER)
 
 
+def test_an_output_of_another_video_of_that_name_points_to_parents_not_only_to_skip_existing(tmp_path, workdir):
+    # xargs -n 1 over day1/cam.mp4 and day2/cam.mp4 into one --out-dir: the second finds day1's output under its own
+    # name. The message offered --skip-existing alone, which then skipped day2 as done (exit 0, its track never
+    # made) or, from another ROI, replaced day1's.
+    from conftest import _make_video
+
+    for day in ("day1", "day2"):
+        (tmp_path / day).mkdir()
+        _make_video(tmp_path / day, "cam.mp4", n_frames=6, seed=3)
+    assert invoke(tmp_path / "day1/cam.mp4", "--no-video", "--out-dir", "tracks", "-q").exit_code == 0
+    result = invoke(tmp_path / "day2/cam.mp4", "--no-video", "--out-dir", "tracks", "-q")
+    assert result.exit_code == 1
+    assert result.stderr == ("lptrack: error: output CSV 'tracks/cam.lptrack.csv' already exists; use --overwrite to "
+                             "replace it (or --skip-existing to keep it if this video wrote it; videos of one name "
+                             "from several folders need --parents)\n")
+    for day in ("day1", "day2"):  # as the message says
+        assert invoke(tmp_path / day / "cam.mp4", "--no-video", "--out-dir", "tracks", "--parents", "-q").exit_code == 0
+    assert len(list((workdir / "tracks").rglob("cam.lptrack.csv"))) == 3
+
+
 def test_roi_partly_over_the_border_is_accepted(tiny_video, workdir):
     # That trackers follow such a ROI is test_trackers.py's test_roi_partly_over_the_border_still_tracks.
     roi = Ellipse.circle(10, 60, 20)

@@ -195,6 +195,49 @@ def _ignore(signum, frame):
     pass  # not SIG_IGN: a signal already pending would then raise "ignored due to race condition"
 
 
+#: Signals that stop lptrack (Ctrl-C, ``kill``, a closed terminal), held back while a worker process starts.
+_STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+@contextmanager
+def _stop_signals_held():
+    """Hold Ctrl-C, SIGTERM and SIGHUP back for the ``with`` block: one that comes is acted on (its handler
+    called) as the block ends.
+
+    One that landed inside ``Process.start()`` (its exchange with the forkserver) left a worker forked but not yet
+    among those :func:`_stop` stops: it went on with its task after lptrack had said "interrupted", made its
+    output folder, and stopped only at its first progress report after the parent had exited. Python runs signal
+    handlers in the main thread whichever thread the signal reaches, so its handlers are swapped (a signal mask
+    would hold it back from this thread only, not from lptrack's other threads); elsewhere than in the main
+    thread, where handlers cannot be set, nothing is held.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[tuple[int, Any]] = []
+
+    def hold(signum, frame) -> None:
+        caught.append((signum, frame))
+
+    previous = {}
+    for signum in _STOP_SIGNALS:
+        handler = signal.getsignal(signum)
+        if handler is not signal.SIG_IGN and handler is not None:  # one ignored (nohup, a background job) stays so
+            previous[signum] = signal.signal(signum, hold)
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        if caught:
+            signum, frame = caught[0]
+            handler = previous[signum]
+            if callable(handler):
+                handler(signum, frame)  # lptrack's: raises KeyboardInterrupt, or Terminated
+            else:  # SIG_DFL: its default action, now that it is back
+                signal.raise_signal(signum)
+
+
 def _worker_main(connection, function, item) -> None:
     """Body of a worker process: run one task, send ``("progress", n)`` messages then one final message."""
     # SIGTERM from the parent (its Ctrl-C) unwinds like Ctrl-C, so the task deletes its temporary outputs.
@@ -277,21 +320,22 @@ def _run_in_processes(function, items, jobs, on_progress, on_worker_death) -> It
                 receiver, sender = context.Pipe(duplex=False)
                 process = context.Process(target=_worker_main, args=(sender, function, item),
                                           name=f"lptrack-task-{index}", daemon=True)
-                try:
-                    process.start()
-                except (EOFError, ConnectionError) as exc:
-                    # The forkserver that workers fork from died (killed, out of memory) while being asked for
-                    # one; multiprocessing starts a new server only on the next request, so one more try.
+                with _stop_signals_held():  # a Ctrl-C now is acted on once the worker is among those to stop
                     try:
                         process.start()
-                    except (EOFError, ConnectionError):
-                        sender.close()
-                        receiver.close()
-                        raise LptrackError(f"cannot start a worker process: multiprocessing's process server "
-                                           f"ended ({describe_exception(exc)}); what had not finished was not "
-                                           f"done") from exc
-                sender.close()  # the child holds its own end; EOF on ours then means it is gone
-                running.append(_Running(index, process, receiver))
+                    except (EOFError, ConnectionError) as exc:
+                        # The forkserver that workers fork from died (killed, out of memory) while being asked for
+                        # one; multiprocessing starts a new server only on the next request, so one more try.
+                        try:
+                            process.start()
+                        except (EOFError, ConnectionError):
+                            sender.close()
+                            receiver.close()
+                            raise LptrackError(f"cannot start a worker process: multiprocessing's process server "
+                                               f"ended ({describe_exception(exc)}); what had not finished was "
+                                               f"not done") from exc
+                    sender.close()  # the child holds its own end; EOF on ours then means it is gone
+                    running.append(_Running(index, process, receiver))
             wait([r.connection for r in running] + [r.process.sentinel for r in running])
             for task in list(running):
                 _drain(task, on_progress)

@@ -1103,6 +1103,39 @@ def test_a_worker_stopped_as_it_starts_reports_interrupted(monkeypatch):
     assert receiver.recv() == ("error", "interrupted")
 
 
+def _sleeping_task(seconds, report):
+    time.sleep(seconds)
+
+
+def test_a_ctrl_c_while_a_worker_starts_stops_that_worker_too(monkeypatch):
+    # A Ctrl-C landing inside Process.start() (after the fork, before start() returned) left that worker out of
+    # those stopped: it went on after 'lptrack: interrupted', made its output folder, and stopped only at its first
+    # progress report once the parent had exited (an empty folder left behind the run).
+    from logpolar_track import executor
+
+    process_class = executor._context().Process
+    real_start = process_class.start
+    started = []
+
+    def start_then_ctrl_c(process):
+        real_start(process)
+        started.append(process)
+        os.kill(os.getpid(), signal.SIGINT)  # the Ctrl-C, as start() returns
+
+    monkeypatch.setattr(process_class, "start", start_then_ctrl_c)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            for _ in executor.run_tasks(_sleeping_task, [60, 60], jobs=2):
+                pass
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert started
+    for process in started:
+        process.join(10)
+        assert not process.is_alive()  # stopped with the others, not left to run its task
+
+
 @pytest.mark.parametrize("failures", [1, 2])
 def test_a_worker_server_that_died_is_asked_again_then_reported(monkeypatch, failures):
     # Workers fork from multiprocessing's forkserver; killed while asked for one, it makes start() raise EOFError,

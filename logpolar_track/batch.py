@@ -34,7 +34,7 @@ from .executor import TaskOutcome, run_tasks
 from .geometry import NUMBER_RULE, ROI_SYNTAX, Ellipse, parse_number, parse_roi
 from .pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, mirrored_path, read_roi_sidecar,
                        read_roi_text, run_video)
-from .results import FORMATS, header_line
+from .results import FORMATS, decode_text, header_line
 from .trackers import tracker_class
 from .outputs import make_output_folder, remove_empty_folders, temporary_path
 from .video import (CODECS_BY_EXTENSION, VIDEO_EXTENSIONS, VideoReader, announced_frame_count, check_fps,
@@ -321,12 +321,28 @@ def _video_listing(stream) -> str:
     return (head + raw.read()).decode("utf-8", "surrogateescape")  # whole, so that no character is cut in two
 
 
+def _roi_listing(stream) -> str:
+    """All of ``stream``, a ROI file given as ``--roi-file -``, as :func:`~logpolar_track.pipeline.read_roi_text`
+    reads a file (UTF-8, or UTF-16 with a byte-order mark)."""
+    if stream is None:
+        raise UsageError("--roi-file - reads the ROI file from standard input, which is closed")
+    raw = getattr(stream, "buffer", None)
+    if raw is None:
+        return stream.read()
+    data = raw.read()
+    try:
+        return decode_text(data)
+    except UnicodeDecodeError:
+        raise LptrackError("cannot read the ROI file from standard input: it is not text in UTF-8 (nor UTF-16 with a "
+                           "byte-order mark)") from None
+
+
 #: How much of standard input is looked at, and the share of it (and a count) that may be bytes no list of paths
 #: has: a short list with one name in Latin-1 is still a list.
 _BINARY_SAMPLE, _BINARY_SHARE, _BINARY_MIN = 65536, 0.05, 16
 
 
-def read_roi_file(path) -> list[RoiEntry]:
+def read_roi_file(path, *, stdin: IO[str] | None = None) -> list[RoiEntry]:
     """The entries of a ROI file, in file order.
 
     A CSV file with one video per line: ``video,roi[,start_frame][,tracker]``. ``roi`` is ``cx,cy,r`` or
@@ -334,7 +350,8 @@ def read_roi_file(path) -> list[RoiEntry]:
     (``clip.mp4,"320,240,40",0,lpcf`` and ``clip.mp4,320,240,40,0,lpcf`` are the same). An optional header line,
     before the first entry (comments may come before it), starts with ``video``; blank lines and lines starting
     with ``#`` are ignored. Relative video paths are relative to the ROI file's folder. UTF-8 or UTF-16 text (see
-    :func:`~logpolar_track.pipeline.read_roi_text`).
+    :func:`~logpolar_track.pipeline.read_roi_text`). ``-`` reads ``stdin`` (default ``sys.stdin``), whose relative
+    paths are relative to the current folder.
 
     Raises
     ------
@@ -344,7 +361,10 @@ def read_roi_file(path) -> list[RoiEntry]:
         A line is malformed (the message gives its number), or lists a video twice.
     """
     path = Path(path)
-    text = read_roi_text(path)
+    if str(path) == "-":  # as VIDEO '-' and --csv -: standard input, its relative paths from the current folder
+        text, shown = _roi_listing(stdin if stdin is not None else sys.stdin), "ROI file (standard input)"
+    else:
+        text, shown = read_roi_text(path), f"ROI file '{path}'"
     entries: list[RoiEntry] = []
     seen: dict[Path, int] = {}
     expected = f"video,roi[,start_frame][,tracker] with roi {ROI_SYNTAX}"
@@ -356,7 +376,7 @@ def read_roi_file(path) -> list[RoiEntry]:
             header_allowed = False
             continue
         header_allowed = False
-        where = f"ROI file '{path}' line {number}"
+        where = f"{shown} line {number}"
         if len(row) == 1 and ";" in row[0]:
             # A spreadsheet saved as CSV where the decimal mark is a comma (most of Europe) separates by ';'.
             raise UsageError(f"{where}: expected {expected}, got '{row[0]}': separated by ';', not commas (a "

@@ -312,6 +312,24 @@ def test_jsonl_stream_holds_the_same_rows(work):
         assert record["frame"] == int(row["frame"]) and record["cx"] == float(row["cx"])
 
 
+def test_roi_file_on_standard_input(work):
+    # `make_rois | lptrack run --roi-file - ...`, as VIDEO '-' and --csv - take '-': it was read as a file named '-'
+    # ("cannot read ROI file '-': No such file or directory", exit 1). Its relative paths: from the current folder.
+    result = invoke("--roi-file", "-", "--no-video", "--csv", "-", "--jobs", "1", "--frames", "3",
+                    stdin='footage/day1/a.mp4,"80,60,20",2\nfootage/day1/b.mp4,80,60,20\n')
+    assert result.exit_code == 0, result.stderr
+    rows = csv_rows(result.stdout)
+    assert [(r["video"], r["frame"]) for r in rows] == [("footage/day1/a.mp4", f) for f in "234"] + [
+        ("footage/day1/b.mp4", f) for f in "012"]
+    bad = invoke("--roi-file", "-", "--no-video", "--csv", "-", stdin="footage/day1/a.mp4,80,60\n")
+    assert bad.exit_code == 2
+    assert bad.stderr.startswith("lptrack: error: ROI file (standard input) line 1: expected video,roi")
+    both = invoke("-", "--roi-file", "-", "--no-video", "--csv", "-", stdin="footage/day1/a.mp4,80,60,20\n")
+    assert both.exit_code == 2
+    assert both.stderr == ("lptrack: error: '-' (standard input) can give the videos' paths or the ROI file, not "
+                           "both: give the ROI file's path, or list the videos in it and leave VIDEO out\n")
+
+
 def test_roi_file_relative_paths_start_frame_and_tracker(work):
     lists = work / "lists"
     lists.mkdir()

@@ -137,8 +137,9 @@ Examples:
               help="Object on the start frame: 'cx,cy,r' or 'cx,cy,a,b,angle' (pixels; degrees CCW). "
                    "Default: the video's .roi sidecar.")
 @click.option("--roi-file", type=PathParam(path_type=Path), metavar="CSV",
-              help="ROIs per video: lines 'video,roi[,start_frame][,tracker]' (paths relative to the file). "
-                   "With no VIDEO, its videos are the inputs.")
+              help="ROIs per video: lines 'video,roi[,start_frame][,tracker]' (paths relative to the file; '-': "
+                   "standard input, paths relative to the current folder). With no VIDEO, its videos are the "
+                   "inputs.")
 @click.option("--tracker", type=TrackerChoice(), default=DEFAULT_TRACKER, show_default=True, metavar="NAME",
               help="Tracking method (see the list below).")
 @click.option("--param", "params", multiple=True, metavar="NAME=VALUE", help=PARAM_HELP)
@@ -238,6 +239,9 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
                  quiet=quiet)
         return
     # Inputs first: a malformed ROI file is the error to see, not what the outputs would have been.
+    if roi_file is not None and str(roi_file) == "-" and "-" in videos:
+        raise UsageError("'-' (standard input) can give the videos' paths or the ROI file, not both: give the ROI "
+                         "file's path, or list the videos in it and leave VIDEO out")
     entries = read_roi_file(roi_file) if roi_file is not None else []
     if scheduler is not None and len(videos) == 1:
         many = "with --scheduler"
@@ -263,8 +267,8 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     if stream and sys.stdout is None:
         raise OutputError("cannot write the rows to stdout: it is closed")
     if not videos and not entries:  # without VIDEO arguments the ROI file's videos are the inputs
-        raise UsageError(f"no videos found in ROI file '{roi_file}': write one line per video, "
-                         f"video,roi[,start_frame][,tracker]")
+        shown = "on standard input (--roi-file -)" if str(roi_file) == "-" else f"in ROI file '{roi_file}'"
+        raise UsageError(f"no videos found {shown}: write one line per video, video,roi[,start_frame][,tracker]")
 
     def named_again(path: Path) -> None:
         if not quiet:

@@ -368,6 +368,24 @@ def test_param_reaches_every_video_of_a_batch(work, jobs):
         {"tracked"}
 
 
+def test_a_tracker_this_installation_lacks_stops_a_batch_before_any_video(work, monkeypatch):
+    # As one video's run refuses it (exit 2, one line); a batch ran every video to fail each with it (a line per
+    # video, exit 1), a ROI file's tracker column too.
+    from logpolar_track.trackers import tracker_class
+
+    monkeypatch.setattr(tracker_class("fixed"), "available", classmethod(lambda cls: False))
+    monkeypatch.setattr(tracker_class("fixed"), "unavailable_reason", classmethod(lambda cls: "not in this build"))
+    one = invoke("footage/day1/a.mp4", "--tracker", "fixed", "--no-video", "--out-dir", "out")
+    assert (one.exit_code, one.stderr) == (2, "lptrack: error: tracker 'fixed' is not available here: not in this "
+                                              "build\n")
+    many = invoke("footage/day1", "--tracker", "fixed", "--no-video", "--out-dir", "out", "--jobs", "1")
+    assert (many.exit_code, many.stderr) == (one.exit_code, one.stderr)
+    (work / "rois.csv").write_text('footage/day1/a.mp4,"80,60,20",,lpcf\nfootage/day1/b.mp4,"80,60,20",,fixed\n')
+    listed = invoke("--roi-file", "rois.csv", "--no-video", "--out-dir", "out", "--jobs", "1")
+    assert (listed.exit_code, listed.stderr) == (one.exit_code, one.stderr)
+    assert not (work / "out").exists()
+
+
 def test_bad_param_stops_a_batch_before_any_video(work):
     result = invoke("footage/day1", "--out-dir", "out", "--no-video", "--param", "window=9")
     assert result.exit_code == 2 and not (work / "out").exists()

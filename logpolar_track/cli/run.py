@@ -25,7 +25,7 @@ from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, check
                         resolve_roi, roi_sidecar_paths, run_video)
 from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
-from ..trackers.base import did_you_mean
+from ..trackers.base import check_available, did_you_mean
 from ..outputs import make_output_folder, remove_empty_folders
 from ..video import (IMAGE_EXTENSIONS, VideoReader, check_fps, guess_image_sequence, input_label, is_image_sequence,
                      read_frame)
@@ -298,6 +298,10 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     plan = plan_batch(inputs, roi=roi, roi_entries=entries, tracker=tracker, start_frame=start_frame,
                       max_frames=max_frames, fps=fps, out_dir=out_dir or ".", video=not no_video, stream=stream,
                       data_format=data_format, overwrite=overwrite, skip_existing=skip_existing, parents=parents)
+    for name in dict.fromkeys(job.tracker for job in plan.jobs) if scheduler is None else ():
+        # Before any video, as one video's run refuses it (exit 2): each video of the batch failed with it instead,
+        # one line per video, exit 1. (A Dask cluster's workers may have the OpenCV this one lacks.)
+        check_available(name)
     if params:
         # Checked against the trackers of the videos that will run, so that a parameter none of them takes is
         # an error, not silently unused.

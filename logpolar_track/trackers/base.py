@@ -300,6 +300,20 @@ def did_you_mean(name: str, choices: Iterable[str]) -> str:
     return f" (did you mean '{near[0]}'?)" if near else ""
 
 
+def check_available(name: str) -> type:
+    """The class of tracker ``name``, if it can run in this installation.
+
+    Raises
+    ------
+    UsageError
+        An unknown tracker, or one this installation cannot run (OpenCV's KCF and CSRT without the contrib wheel).
+    """
+    cls = tracker_class(name)
+    if not cls.available():
+        raise UsageError(f"tracker '{name}' is not available here: {cls.unavailable_reason()}")
+    return cls
+
+
 def create_tracker(name: str, **params) -> Tracker:
     """A new tracker of the registered kind ``name`` with keyword tuning ``params``.
 
@@ -308,9 +322,7 @@ def create_tracker(name: str, **params) -> Tracker:
     UsageError
         An unknown or unavailable tracker, or ``params`` it does not take or accept.
     """
-    cls = tracker_class(name)
-    if not cls.available():
-        raise UsageError(f"tracker '{name}' is not available here: {cls.unavailable_reason()}")
+    cls = check_available(name)
     try:  # the parameters' kinds are checked by the construction itself (Tracker.__init_subclass__)
         return cls(**params)
     except LptrackError:

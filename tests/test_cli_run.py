@@ -263,6 +263,22 @@ def test_an_output_of_another_video_of_that_name_points_to_parents_not_only_to_s
     assert len(list((workdir / "tracks").rglob("cam.lptrack.csv"))) == 3
 
 
+def test_a_url_is_refused_as_such_not_reported_missing_under_a_mangled_name(tiny_video, workdir):
+    # Read as a path, 'http://host/x.mp4' was "video 'http:/host/x.mp4' not found" (exit 1): '//' collapsed, and no
+    # word that lptrack reads files only.
+    result = invoke("http://example.com/clip.mp4", "--roi", "80,60,20")
+    assert result.exit_code == 2
+    assert result.stderr == ("lptrack: error: Invalid value for 'VIDEO...': 'http://example.com/clip.mp4' is a URL; "
+                             "lptrack reads and writes local files only (a video online: download it first, e.g. "
+                             "ffmpeg -i 'http://example.com/clip.mp4' -c copy clip.mp4) (see 'lptrack run --help')\n")
+    output = invoke(tiny_video.path, "--no-video", "--csv", "s3://bucket/t.csv")
+    assert output.exit_code == 2
+    assert "'s3://bucket/t.csv' is a URL; lptrack reads and writes local files only (see" in output.stderr
+    assert listing(workdir) == []
+    # A colon alone is a file name like another.
+    assert invoke(tiny_video.path, "--no-video", "--csv", "take:1.csv", "-q").exit_code == 0
+
+
 def test_roi_partly_over_the_border_is_accepted(tiny_video, workdir):
     # That trackers follow such a ROI is test_trackers.py's test_roi_partly_over_the_border_still_tracks.
     roi = Ellipse.circle(10, 60, 20)

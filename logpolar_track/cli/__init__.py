@@ -12,6 +12,7 @@ import contextlib
 import errno
 import math
 import os
+import re
 import signal
 import sys
 import threading
@@ -316,7 +317,16 @@ class PathParam(click.Path):
     def convert(self, value, param, ctx):
         if isinstance(value, str) and not value:
             self.fail("an empty name was given (an unset shell variable?); give a file or folder name", param, ctx)
+        if isinstance(value, str) and _URL.match(value):
+            # Read as a path, 'http://host/x.mp4' was reported as "video 'http:/host/x.mp4' not found".
+            hint = (f" (a video online: download it first, e.g. ffmpeg -i '{value}' -c copy clip.mp4)"
+                    if param is not None and param.param_type_name == "argument" else "")
+            self.fail(f"'{value}' is a URL; lptrack reads and writes local files only{hint}", param, ctx)
         return super().convert(value, param, ctx)
+
+
+#: A URL's scheme (http://, rtsp://, file://): no file name starts so.
+_URL = re.compile(r"[A-Za-z][A-Za-z0-9+.-]*://")
 
 
 class WholeNumber(click.IntRange):

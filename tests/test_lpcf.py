@@ -1929,3 +1929,22 @@ def test_the_colour_extent_reads_a_coloured_objects_size_change(grown):
     grey = create_tracker("lpcf")
     grey.init(cv2.cvtColor(first, cv2.COLOR_BGR2GRAY), Ellipse.circle(320, 240, 40))
     assert grey.colour is None  # the cue is read only where the colour model is
+
+
+def test_the_re_detection_leaves_the_patch_of_the_estimate_it_returns():
+    """The long-term check and learning read the patch last correlated (``_last_sample``) as the one the estimate was
+    found on. The re-detection correlates candidates elsewhere; where it keeps the estimate it was given (here the
+    object's own place), its patch must be that estimate's, not the last candidate's (a place 90 px away)."""
+    roi = Ellipse(320.0, 240.0, 40.0, 30.0, 0.0)
+    poses = [Pose(320.0, 240.0, 1.0, 0.0), Pose(330.0, 236.0, 1.0, 0.0)]
+    for seed in range(4):
+        frames = list(synthetic_sequence(poses, roi, size=(640, 480), seed=seed))
+        tracker = create_tracker("lpcf")
+        tracker.init(frames[0], roi)
+        frame = tracker._prepared(frames[1])
+        tracker.misses = tracker.redetect_after
+        start = Similarity(330.0, 236.0, 1.0, 0.0, 1.0)
+        moved, psr, peak = tracker._translate(frame, start)
+        result = tracker._redetect(frame, start, moved, psr, peak)
+        again = tracker._translate(frame, tracker._last_sample[0])[0]
+        assert (again.cx, again.cy) == (result[0].cx, result[0].cy)

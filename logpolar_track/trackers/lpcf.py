@@ -620,12 +620,15 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             # Look there too, until a place answers confidently.
             behind = Similarity(2 * last.cx - predicted.cx, 2 * last.cy - predicted.cy, last.scale,
                                 last.rotation_deg, last.score)
+            kept = self._last_sample  # the patch ``moved`` was found on, unless a place here answers better
             for place in (last, behind):
                 other, other_psr, other_peak = self._translate(frame, place)
                 if other_psr > psr:
                     moved, psr, peak = other, other_psr, other_peak
+                    kept = self._last_sample
                 if psr >= self.psr_learn:
                     break
+            self._last_sample = kept
         here = moved
         if self.misses >= self.redetect_after:
             moved, psr, peak = self._redetect(frame, predicted, moved, psr, peak)
@@ -1089,13 +1092,17 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             self._redetect_sweep, self._redetect_part = sweep + 1, 0
         found, found_relit = None, False
         turned_or_resized = (turn, size) != (0.0, 1.0)
+        # The patch correlated at ``best`` (what the long-term check and learning read, see _estimate), unless a
+        # candidate is taken: then the candidate's.
+        kept = found_sample = self._last_sample
         for (cx, cy), from_relit in zip(centres, relit):
             candidate = Similarity(float(cx), float(cy), pose.scale, pose.rotation_deg, state.score)
             moved, cand_psr, cand_peak = self._translate(frame, candidate)
             if turned_or_resized and cand_psr < _SEARCH_POSE_PSR * self.psr_learn:
                 continue
             if cand_psr > psr and (found is None or cand_psr > found[1]):
-                found, found_relit = (moved, cand_psr, cand_peak), from_relit
+                found, found_relit, found_sample = (moved, cand_psr, cand_peak), from_relit, self._last_sample
+        self._last_sample = kept
         if found is None:
             return best, psr, peak
         # A sharper response elsewhere must also match the object (filter peak x log-polar height) better than
@@ -1122,6 +1129,7 @@ class LogPolarCorrelationTracker(SimilarityTracker):
             floor *= _RELIT_MATCH_GAIN  # see _RELIT_PSR_GAIN
         if found[2] * there <= floor:
             return best, psr, peak
+        self._last_sample = found_sample
         return found
 
     def _within_reach(self, centres: np.ndarray, last: Similarity, frames: int,

@@ -55,7 +55,8 @@ class ScaleFilter:
         # Half-spectrum DFT of the rows (frequencies 0 .. n_scales // 2), real and imaginary parts.
         k = np.arange(n_scales // 2 + 1)[:, None]
         phase = 2 * np.pi * k * np.arange(n_scales)[None, :] / n_scales
-        # Matlab's hann(n), as in DSST (no zero end points), folded into the forward transform.
+        # Matlab's hanning(n) (no zero end points), folded into the forward transform. Not DSST's hann(n), whose end
+        # points are 0 (its first and last sizes would count for nothing).
         window = np.hanning(n_scales + 2)[1:-1]
         self._forward_re = (np.cos(phase) * window).astype(np.float32)
         self._forward_im = (-np.sin(phase) * window).astype(np.float32)

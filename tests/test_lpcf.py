@@ -723,9 +723,9 @@ def test_a_search_in_parts_covers_each_pose_part_by_part_in_turn(monkeypatch):
     searched = []  # (turn from the last tracked angle in degrees, size factor, part, parts) per search
     frame_candidates = lpcf.LogPolarCorrelationTracker._frame_candidates
 
-    def spy(self, frame, pose, count, long_term=False, local_light=False, coarse=None):
+    def spy(self, frame, pose, count, long_term=False, local_light=False, coarse=None, maps=None):
         part = self._search_part
-        centres = frame_candidates(self, frame, pose, count, long_term, local_light, coarse)
+        centres = frame_candidates(self, frame, pose, count, long_term, local_light, coarse, maps)
         if not long_term:
             last = self._last_good
             searched.append((round(pose.rotation_deg - last.rotation_deg, 6), round(pose.scale / last.scale, 6),

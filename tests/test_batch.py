@@ -856,6 +856,21 @@ def test_a_scheduler_address_that_is_not_a_dask_scheduler_is_one_line(work, monk
     assert not (work / "out").exists()
 
 
+def test_an_interrupted_dask_batch_says_that_started_videos_go_on(work, monkeypatch):
+    # lptrack cannot stop Dask's workers; "lptrack: interrupted" alone left their outputs appearing afterwards unsaid.
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli_run, "run_batch", interrupted)
+    result = invoke("footage/day1", "--no-video", "--scheduler", "tcp://127.0.0.1:8786")
+    assert result.exit_code == 130
+    assert result.stderr.splitlines() == [
+        "lptrack: note: videos a Dask worker had started go on there and leave their outputs when done (wait for "
+        "them before a --skip-existing rerun); the others were cancelled", "lptrack: interrupted"]
+    local = invoke("footage/day1", "--no-video", "--jobs", "2")
+    assert (local.exit_code, local.stderr) == (130, "lptrack: interrupted\n")
+
+
 def test_scheduler_without_dask_gives_a_hint(work, monkeypatch):
     monkeypatch.setitem(sys.modules, "dask.distributed", None)  # import fails as if the extra were missing
     result = invoke("footage/day1", "--no-video", "--scheduler", "tcp://127.0.0.1:8786")

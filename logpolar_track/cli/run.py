@@ -567,6 +567,7 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
         else:
             bar.update(progress.frames_done - bar.n)  # tqdm redraws at most ten times a second
 
+    interrupted = False
     try:
         with stdout_errors() if stream else contextlib.nullcontext():
             summary = run_batch(plan, jobs=jobs, scheduler=scheduler, stream=sys.stdout if stream else None,
@@ -577,9 +578,17 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
         stop_if_reader_left()
     except BrokenPipeError:
         stdout_reader_left()
+    except KeyboardInterrupt:  # Ctrl-C, and SIGTERM or SIGHUP as lptrack turns them into it
+        interrupted = True
+        raise
     finally:
         if bar is not None:
             bar.close()
+        if interrupted and scheduler is not None and not quiet:
+            # lptrack cannot stop Dask's workers: a --skip-existing rerun started at once raced the videos still
+            # running there, whose outputs appeared after "interrupted".
+            click.echo("lptrack: note: videos a Dask worker had started go on there and leave their outputs when "
+                       "done (wait for them before a --skip-existing rerun); the others were cancelled", err=True)
     _report(summary, quiet=quiet, video=any(job.video_out is not None for job in plan.jobs))
     return summary
 

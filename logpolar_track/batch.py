@@ -867,7 +867,8 @@ def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str]
               data_format: str = "csv",
               on_outcome: Callable[[VideoOutcome], None] | None = None,
               on_frames: Callable[[int], None] | None = None,
-              on_progress: Callable[[BatchProgress], None] | None = None) -> BatchSummary:
+              on_progress: Callable[[BatchProgress], None] | None = None,
+              on_note: Callable[[str], None] | None = None) -> BatchSummary:
     """Run a :func:`plan_batch` plan; return every video's outcome in input order.
 
     Parameters
@@ -888,6 +889,8 @@ def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str]
         as frames are tracked, in this process or in local worker processes (each reports a few times a
         second), and as each video settles. Dask workers report nothing until their video is done, so on a
         cluster the frames advance one finished video at a time.
+    on_note : callable, optional
+        Called with a sentence for the user (see :func:`~logpolar_track.executor.run_tasks`).
     """
     started = time.perf_counter()
     outcomes = dict(plan.settled)
@@ -937,7 +940,7 @@ def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str]
 
     try:
         for result in run_tasks(run_job, plan.jobs, jobs=jobs, scheduler=scheduler, on_progress=progress,
-                                on_worker_death=worker_died):
+                                on_worker_death=worker_died, on_note=on_note):
             outcome = _settle(plan.jobs[result.index], result)
             done_frames[result.index] = outcome.frames
             outcomes[outcome.label] = outcome

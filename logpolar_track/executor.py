@@ -127,7 +127,8 @@ def describe_exception(exc: BaseException) -> str:
 
 def run_tasks(function: TaskFunction, items: Sequence, *, jobs: int = 1, scheduler=None,
               on_progress: Callable[[int, int], None] | None = None,
-              on_worker_death: Callable[[int, int], None] | None = None) -> Iterator[TaskOutcome]:
+              on_worker_death: Callable[[int, int], None] | None = None,
+              on_note: Callable[[str], None] | None = None) -> Iterator[TaskOutcome]:
     """Call ``function(item, report)`` for every item; yield a :class:`TaskOutcome` per item as each finishes.
 
     Parameters
@@ -146,6 +147,9 @@ def run_tasks(function: TaskFunction, items: Sequence, *, jobs: int = 1, schedul
     on_worker_death : callable, optional
         ``on_worker_death(index, pid)`` after a worker process died without finishing its task, e.g. to
         delete its temporary files.
+    on_note : callable, optional
+        Called with a sentence for the user about the run (a Dask cluster with no workers yet, where the tasks
+        wait for one).
 
     Yields
     ------
@@ -162,7 +166,7 @@ def run_tasks(function: TaskFunction, items: Sequence, *, jobs: int = 1, schedul
         On Ctrl-C (or SIGTERM turned into it by the caller), after every worker process has been stopped.
     """
     if scheduler is not None:
-        yield from _run_on_dask(function, items, scheduler)
+        yield from _run_on_dask(function, items, scheduler, on_note)
     elif jobs <= 1 or len(items) <= 1:
         yield from _run_here(function, items, on_progress)
     else:
@@ -466,7 +470,7 @@ def _connect(client_class, scheduler: str):
     raise LptrackError(f"cannot connect to the Dask scheduler '{scheduler}': {message}")
 
 
-def _run_on_dask(function, items, scheduler) -> Iterator[TaskOutcome]:
+def _run_on_dask(function, items, scheduler, on_note=None) -> Iterator[TaskOutcome]:
     try:
         from dask.distributed import Client, as_completed
     except ImportError:
@@ -475,6 +479,12 @@ def _run_on_dask(function, items, scheduler) -> Iterator[TaskOutcome]:
     client = _connect(Client, scheduler) if own_client else scheduler
     futures = {}
     try:
+        info = client.scheduler_info() if on_note is not None and items else {"workers": True}
+        if not info.get("workers"):
+            # The tasks wait for a worker, and nothing else would say so: it looked like a hang.
+            address = scheduler if own_client else info.get("address", "")  # as the user gave it, if given
+            on_note(f"the Dask scheduler '{address}' has no workers yet; nothing runs until one connects (Ctrl-C "
+                    f"to stop)")
         for index, item in enumerate(items):
             futures[client.submit(function, item, None, pure=False)] = index
         for future in as_completed(futures, loop=client.loop):

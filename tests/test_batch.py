@@ -15,6 +15,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -810,6 +811,36 @@ def test_dask_local_cluster_gives_the_same_csvs(work):
     assert [o.status for o in summary.outcomes] == ["ok", "ok", "failed"]
     # Dask workers report no frames while they run: the progress moves a finished video at a time.
     assert seen[-1] == (summary.frames, summary.frames, 3)
+
+
+def _double(item, report):
+    return 2 * item
+
+
+def test_a_dask_cluster_without_workers_is_said_to_wait_for_one():
+    # The tasks waited in silence for a worker: lptrack looked hung.
+    distributed = pytest.importorskip("dask.distributed")
+    from logpolar_track.executor import run_tasks
+
+    with distributed.LocalCluster(n_workers=0, processes=False, protocol="tcp", host="127.0.0.1",
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        notes, results = [], []
+        waiting = threading.Thread(target=lambda: results.extend(
+            run_tasks(_double, [21], scheduler=client, on_note=notes.append)))
+        waiting.start()
+        for _ in range(200):  # the note comes before the task is submitted
+            if notes:
+                break
+            time.sleep(0.05)
+        assert notes == [f"the Dask scheduler '{cluster.scheduler_address}' has no workers yet; nothing runs until "
+                         "one connects (Ctrl-C to stop)"]
+        assert results == []
+        cluster.scale(1)
+        waiting.join(60)
+        assert [(r.index, r.value) for r in results] == [(0, 42)]
+        notes.clear()
+        assert [r.value for r in run_tasks(_double, [1], scheduler=client, on_note=notes.append)] == [2]
+        assert notes == []  # a worker is there now
 
 
 def test_malformed_scheduler_address_is_one_line_and_ends_at_once(work):

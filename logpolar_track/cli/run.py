@@ -567,6 +567,14 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
         else:
             bar.update(progress.frames_done - bar.n)  # tqdm redraws at most ten times a second
 
+    def note(text: str) -> None:
+        if quiet:
+            return
+        if bar is not None:
+            bar.write(f"lptrack: note: {text}", file=sys.stderr)  # above the bar, not across it
+        else:
+            echo_progress(f"lptrack: note: {text}")
+
     interrupted = False
     try:
         with stdout_errors() if stream else contextlib.nullcontext():
@@ -574,7 +582,8 @@ def _run_many(plan, *, jobs: int, scheduler: str | None, stream: bool, data_form
                                 data_format=data_format, on_outcome=on_outcome,
                                 on_frames=lambda frames: stop_if_reader_left(),
                                 on_progress=on_progress if bar is not None else (
-                                    None if log_progress is None else log_batch_progress))
+                                    None if log_progress is None else log_batch_progress),
+                                on_note=note)
         stop_if_reader_left()
     except BrokenPipeError:
         stdout_reader_left()

@@ -479,12 +479,13 @@ def _run_on_dask(function, items, scheduler, on_note=None) -> Iterator[TaskOutco
     client = _connect(Client, scheduler) if own_client else scheduler
     futures = {}
     try:
-        info = client.scheduler_info() if on_note is not None and items else {"workers": True}
-        if not info.get("workers"):
-            # The tasks wait for a worker, and nothing else would say so: it looked like a hang.
-            address = scheduler if own_client else info.get("address", "")  # as the user gave it, if given
-            on_note(f"the Dask scheduler '{address}' has no workers yet; nothing runs until one connects (Ctrl-C "
-                    f"to stop)")
+        if on_note is not None and items:
+            info = client.scheduler_info()
+            if not info.get("workers"):
+                # The tasks wait for a worker, and nothing else would say so: it looked like a hang.
+                address = scheduler if own_client else info.get("address", "")  # as the user gave it, if given
+                on_note(f"the Dask scheduler '{address}' has no workers yet; nothing runs until one connects "
+                        f"(Ctrl-C to stop)")
         for index, item in enumerate(items):
             futures[client.submit(function, item, None, pure=False)] = index
         for future in as_completed(futures, loop=client.loop):

@@ -1298,11 +1298,12 @@ class LogPolarCorrelationTracker(SimilarityTracker):
                 maps[key] = patch_features(self._patch(frame, centre, (part_w, part_h), cv2.BORDER_REFLECT_101))
             finally:
                 self._blur_scale = blur_scale
-        # The next patch blurs a crop of its own, whether or not the map was made now (the same samples either way).
+        # Forgotten whether or not the map was made now, as it was before maps were shared, so that the patches
+        # after it are sampled from the crops they were sampled from before (the results bit-identical).
         self._blur_cache = None
         features = maps[key]
-        def strongest_places(maps: np.ndarray) -> np.ndarray:
-            response = coarse.response(maps)
+        def strongest_places(channels: np.ndarray) -> np.ndarray:
+            response = coarse.response(channels)
             rows, cols = np.nonzero(response == cv2.dilate(response, np.ones((5, 5), np.uint8)))
             strongest = np.argsort(-response[rows, cols], kind="stable")
             p, q = cols[strongest] - part_w / 2.0, rows[strongest] - part_h / 2.0

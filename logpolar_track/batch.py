@@ -32,11 +32,11 @@ from typing import IO, Callable, Iterable, Mapping, Sequence
 from .errors import LptrackError, RoiError, UsageError, VideoError
 from .executor import TaskOutcome, run_tasks
 from .geometry import NUMBER_RULE, ROI_SYNTAX, Ellipse, parse_number, parse_roi
-from .pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, mirrored_path, read_roi_sidecar,
-                       read_roi_text, run_video)
+from .pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, RunSummary, mirrored_path,
+                       read_roi_sidecar, read_roi_text, run_video)
 from .results import FORMATS, decode_text, header_line
 from .trackers import tracker_class
-from .outputs import make_output_folder, remove_empty_folders, temporary_path
+from .outputs import remove_empty_folders, run_in_output_folders, temporary_path
 from .video import (CODECS_BY_EXTENSION, VIDEO_EXTENSIONS, VideoReader, announced_frame_count, check_fps,
                     frames_to_track, is_image_sequence, video_stem)
 
@@ -686,20 +686,26 @@ def plan_batch(videos: list[VideoInput], *, roi: Ellipse | None = None, roi_entr
 def run_job(job: VideoJob, report: Callable[[int], None] | None = None) -> VideoOutcome:
     """Track one video of a batch (the unit of work a worker runs); raises on failure.
 
-    Output folders are created as needed. ``report(frames_done)`` is called as frames are tracked.
+    Output folders are created as needed (and left for the batch to remove if it leaves them empty).
+    ``report(frames_done)`` is called as frames are tracked.
     """
-    for out in (job.video_out, job.csv_out):
-        if out is not None:
-            make_output_folder(out.parent)
-    buffer = io.StringIO() if job.stream else None
-    csv_options = {"data_format": job.data_format}
-    if job.stream:
-        csv_options.update(stream=buffer, video=job.label, header=False)
     progress = None if report is None else (lambda done, total: report(done))
-    summary = run_video(job.video, job.roi, tracker=job.tracker, start_frame=job.start_frame,
-                        max_frames=job.max_frames, video_out=job.video_out,
-                        csv_out="-" if job.stream else job.csv_out, overwrite=job.overwrite, progress=progress,
-                        csv_options=csv_options, tracker_params=job.tracker_params, fps=job.fps)
+
+    def track() -> tuple[RunSummary, io.StringIO | None]:
+        buffer = io.StringIO() if job.stream else None
+        csv_options = {"data_format": job.data_format}
+        if job.stream:
+            csv_options.update(stream=buffer, video=job.label, header=False)
+        summary = run_video(job.video, job.roi, tracker=job.tracker, start_frame=job.start_frame,
+                            max_frames=job.max_frames, video_out=job.video_out,
+                            csv_out="-" if job.stream else job.csv_out, overwrite=job.overwrite, progress=progress,
+                            csv_options=csv_options, tracker_params=job.tracker_params, fps=job.fps)
+        return summary, buffer
+
+    # The rows of a stream are kept until the video is done: a start made again (its folder removed meanwhile by
+    # another process) sends none twice.
+    summary, buffer = run_in_output_folders([out.parent for out in (job.video_out, job.csv_out) if out is not None],
+                                            track, remove_made=False)
     return VideoOutcome(job.label, "ok", frames=summary.frames, lost=summary.lost,
                         expected_frames=summary.expected_frames, seconds=summary.seconds,
                         truncated=summary.truncated, rows=None if buffer is None else buffer.getvalue(),

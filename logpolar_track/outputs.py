@@ -12,7 +12,7 @@ import contextlib
 import hashlib
 import os
 from pathlib import Path
-from typing import Iterator
+from typing import Callable, Iterator, TypeVar
 
 import cv2
 import numpy as np
@@ -21,6 +21,8 @@ from .errors import OutputError, UsageError
 
 #: Bytes in a file name most file systems take (ext4, XFS, APFS, NTFS's 255 UTF-16 units are more).
 _NAME_MAX = 255
+
+T = TypeVar("T")
 
 
 def temporary_path(path: Path, *, pid: int | None = None) -> Path:
@@ -140,6 +142,41 @@ def make_output_folder(folder) -> list[Path]:
     except OSError as exc:
         raise OutputError(f"cannot create output folder '{folder}': {exc.strerror or exc}") from None
     return missing
+
+
+#: How many times :func:`run_in_output_folders` starts its work, making its folders again when another process
+#: removed one of them meanwhile.
+_FOLDER_ATTEMPTS = 3
+
+
+def run_in_output_folders(folders, work: Callable[[], T], *, retry: bool = True, remove_made: bool = True) -> T:
+    """Make ``folders`` (:func:`make_output_folder`) and return ``work()``, which writes its outputs into them.
+
+    Parallel runs into one folder (``xargs -P``, several ``lptrack run`` at once) each make it if it is missing,
+    and one that fails removes the folder it made if it is empty. If that lands after this process made or found
+    the folder and before it opened its outputs there (an output's temporary file, once open, keeps the folder from
+    being removed), ``work`` raises :class:`OutputError` with a folder gone: the folders are made again and
+    ``work`` is started again (``_FOLDER_ATTEMPTS`` times in all). Nothing is written by then if every output goes
+    into ``folders`` (they are opened before the first frame is written); rows sent to a stream before the video's
+    first frame (``--csv -``) would be sent again: give ``retry=False`` there. With ``remove_made``, the folders
+    made here are removed again if ``work`` leaves them empty (it failed, or wrote nothing there); else whoever
+    runs several works into them does that once they are all done.
+    """
+    folders = [Path(folder) for folder in folders]
+    attempts = _FOLDER_ATTEMPTS if retry else 1
+    made: list[Path] = []
+    try:
+        for attempt in range(1, attempts + 1):
+            for folder in folders:
+                made += make_output_folder(folder)
+            try:
+                return work()
+            except OutputError:
+                if attempt >= attempts or all(folder.is_dir() for folder in folders):
+                    raise
+    finally:
+        if remove_made:
+            remove_empty_folders(made)
 
 
 def remove_empty_folders(folders) -> None:

@@ -1067,6 +1067,9 @@ class VideoWriter:
 
     def _open(self, width: int, height: int) -> None:
         opencv_path(self.wanted_path, "output video", OutputError)  # its temporary name shares the name's stem
+        if not self.wanted_path.parent.is_dir():  # removed since it was checked: OpenCV would say no codec opens
+            raise OutputError(f"cannot write output video '{self.wanted_path}': folder '{self.wanted_path.parent}' "
+                              f"does not exist (removed after the run started)")
         tried = []
         for code, extension in CODECS_BY_EXTENSION[self.wanted_path.suffix.lower()]:
             target = self.wanted_path.with_suffix(extension) if extension != self.wanted_path.suffix.lower() \

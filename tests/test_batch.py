@@ -23,6 +23,7 @@ import cv2
 import pytest
 
 from conftest import CliRunner, _make_video, damage_middle
+from logpolar_track import pipeline
 from logpolar_track.batch import (BatchProgress, VideoInput, VideoOutcome, announced_job_frames, data_frame_span,
                                   find_videos, plan_batch, read_roi_file, run_batch)
 from logpolar_track.cli import main
@@ -280,6 +281,33 @@ def test_failed_video_leaves_no_folder_made_for_it(work):
     assert files_under(work / "out") == ["day1/a.lptrack.csv"]
     assert sorted(p.name for p in (work / "out").iterdir()) == ["day1"]
     assert len(csv_rows(work / "out" / "day1/a.lptrack.csv")) == 7  # --frames applies to every video
+
+
+@pytest.mark.parametrize("stream", [False, True])
+def test_a_folder_removed_by_a_parallel_run_is_made_again(work, monkeypatch, stream):
+    # Another lptrack run into the same folder that failed removes the folder it made if it is empty, which can
+    # land between this batch's making it and opening a video's outputs there (xargs -P). The checks are counted
+    # in a file: the videos may be tracked in worker processes.
+    checks = work / "checks"
+    real_check = pipeline.check_outputs
+
+    def check_outputs(*args, **kwargs):
+        with open(checks, "a") as count:
+            count.write("check\n")
+        if len(checks.read_text().splitlines()) == 1:
+            (work / "out").rmdir()
+        return real_check(*args, **kwargs)
+
+    monkeypatch.setattr(pipeline, "check_outputs", check_outputs)
+    result = invoke("footage/day1", "--out-dir", "out", "--jobs", "1", *(["--csv", "-"] if stream else []))
+    assert result.exit_code == 0, result.stderr
+    assert len(checks.read_text().splitlines()) == 3
+    if stream:  # each video's rows once
+        videos = [r["video"] for r in csv_rows(result.stdout)]
+        assert videos == ["footage/day1/a.mp4"] * 20 + ["footage/day1/b.mp4"] * 24
+        assert files_under(work / "out") == ["a.lptrack.mp4", "b.lptrack.mp4"]
+    else:
+        assert files_under(work / "out") == ["a.lptrack.csv", "a.lptrack.mp4", "b.lptrack.csv", "b.lptrack.mp4"]
 
 
 def test_one_video_is_counted_in_the_singular(work):

@@ -444,6 +444,38 @@ def test_out_dir_left_no_output_is_an_error(tiny_video, workdir, args):
                                                    "for the outputs lptrack names, and --csv "), result.stderr
 
 
+def removed_once_before_the_outputs_are_checked(monkeypatch, folder: Path) -> list[int]:
+    """Make ``folder`` vanish once, just before a run checks its outputs: what a parallel run into the same folder
+    that failed does when it removes the folder it made (``xargs -P``). Returns the count of checks."""
+    checks = []
+    real_check = pipeline.check_outputs
+
+    def check_outputs(*args, **kwargs):
+        checks.append(1)
+        if len(checks) == 1:
+            folder.rmdir()
+        return real_check(*args, **kwargs)
+
+    monkeypatch.setattr(pipeline, "check_outputs", check_outputs)
+    return checks
+
+
+def test_an_out_dir_removed_by_a_parallel_run_is_made_again(tiny_video, workdir, monkeypatch):
+    checks = removed_once_before_the_outputs_are_checked(monkeypatch, workdir / "out")
+    result = invoke(tiny_video.path, "--out-dir", "out")
+    assert result.exit_code == 0, result.stderr
+    assert len(checks) == 2 and listing(workdir / "out") == ["tiny.lptrack.csv", "tiny.lptrack.mp4"]
+    assert len(read_rows((workdir / "out" / "tiny.lptrack.csv").read_text())) == tiny_video.n_frames
+
+
+def test_rows_on_stdout_are_not_sent_twice_when_the_out_dir_goes(tiny_video, workdir, monkeypatch):
+    checks = removed_once_before_the_outputs_are_checked(monkeypatch, workdir / "out")
+    result = invoke(tiny_video.path, "--out-dir", "out", "--csv", "-")
+    assert result.exit_code == 1 and len(checks) == 1
+    assert result.stderr.endswith("folder 'out' does not exist\n"), result.stderr
+    assert listing(workdir) == []
+
+
 def test_no_roi_and_no_sidecar(tiny_video, workdir):
     tiny_video.path.with_suffix(".roi").unlink()
     result = invoke(tiny_video.path)

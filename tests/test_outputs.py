@@ -6,7 +6,7 @@ import os
 import pytest
 
 from logpolar_track.errors import OutputError
-from logpolar_track.outputs import temporary_path, written_into_place
+from logpolar_track.outputs import check_output_path, run_in_output_folders, temporary_path, written_into_place
 
 
 def test_a_finished_output_is_moved_into_place_and_its_temporary_name_is_gone(tmp_path):
@@ -83,3 +83,41 @@ def test_the_temporary_name_of_a_long_name_fits_the_file_system(tmp_path):
         assert target.read_text() == "frame\n" and sorted(p.name for p in tmp_path.iterdir()) == [target.name]
         target.unlink()
     assert temporary_path(tmp_path / "run.csv").name == f".run.{os.getpid()}.part.csv"  # short names as before
+
+
+def test_work_whose_folder_was_removed_meanwhile_is_started_again_in_it(tmp_path):
+    folder = tmp_path / "out" / "day1"
+    starts = []
+
+    def work():
+        starts.append(folder.is_dir())
+        if len(starts) == 1:  # a parallel run that failed removes the folders it made, left empty
+            folder.rmdir()
+        check_output_path(folder / "a.csv", what="output CSV")
+        return "done"
+
+    assert run_in_output_folders([folder], work) == "done" and starts == [True, True]
+    assert not (tmp_path / "out").exists()  # made here and left empty: removed again
+
+
+def test_a_failure_with_its_folders_in_place_is_not_started_again(tmp_path):
+    starts = []
+
+    def work():
+        starts.append(1)
+        raise OutputError("cannot write output CSV: No space left on device")
+
+    with pytest.raises(OutputError, match="No space left"):
+        run_in_output_folders([tmp_path / "out"], work)
+    assert starts == [1] and list(tmp_path.iterdir()) == []
+    folder = tmp_path / "kept"
+
+    def removed_each_time():
+        starts.append(1)
+        folder.rmdir()
+        raise OutputError("folder does not exist")
+
+    starts.clear()
+    with pytest.raises(OutputError):
+        run_in_output_folders([folder], removed_each_time, retry=False, remove_made=False)
+    assert starts == [1]

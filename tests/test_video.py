@@ -383,6 +383,17 @@ def test_a_stop_while_the_writer_opens_leaves_nothing(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_writer_whose_folder_went_says_so_not_that_no_codec_opens(tmp_path):
+    folder = tmp_path / "out"
+    folder.mkdir()
+    writer = VideoWriter(folder / "v.mp4", 25.0)
+    folder.rmdir()  # by a parallel run into the same folder that failed, say
+    with pytest.raises(OutputError, match=r"^cannot write output video '.*v.mp4': folder '.*out' does not exist "
+                                          r"\(removed after the run started\)$"):
+        writer.write(np.zeros((48, 64, 3), np.uint8))
+    writer.abort()
+
+
 def test_writer_abort_on_exception_leaves_nothing(tiny_video, tmp_path):
     with pytest.raises(KeyboardInterrupt):
         with VideoWriter(tmp_path / "out.mp4", 30.0) as writer:

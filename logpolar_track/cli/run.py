@@ -26,7 +26,7 @@ from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, check
 from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..trackers.base import check_available, did_you_mean
-from ..outputs import make_output_folder, remove_empty_folders
+from ..outputs import make_output_folder, remove_empty_folders, run_in_output_folders
 from ..video import (IMAGE_EXTENSIONS, VideoReader, check_fps, guess_image_sequence, input_label, is_image_sequence,
                      read_frame)
 from . import (EXIT_FAILURE, PARAM_HELP, FrameRate, OneLineErrors, PathParam, TimeParam, WholeNumber,
@@ -393,14 +393,14 @@ def _run_one(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, 
     if parents:  # _check_out_dir made sure lptrack names at least one of the outputs
         base = Path(out_dir or ".") / mirrored_output_base(video)
         out_dir, name = base.parent, base.name
-    created = make_output_folder(out_dir) if out_dir is not None else []
-    try:
-        _run_one_into(video, roi, tracker=tracker, tuning=tuning, start_frame=start_frame, start_time=start_time,
-                      max_frames=max_frames, fps=fps, video_out=video_out, csv_out=csv_out, out_dir=out_dir, name=name,
-                      data_format=data_format, no_video=no_video, overwrite=overwrite, skip_existing=skip_existing,
-                      quiet=quiet)
-    finally:
-        remove_empty_folders(created)  # a run that failed or was stopped leaves no folder made for it
+    # A run that failed or was stopped leaves no folder made for it.
+    run_in_output_folders(
+        [] if out_dir is None else [out_dir],
+        lambda: _run_one_into(video, roi, tracker=tracker, tuning=tuning, start_frame=start_frame,
+                              start_time=start_time, max_frames=max_frames, fps=fps, video_out=video_out,
+                              csv_out=csv_out, out_dir=out_dir, name=name, data_format=data_format, no_video=no_video,
+                              overwrite=overwrite, skip_existing=skip_existing, quiet=quiet),
+        retry=csv_out != "-")
 
 
 def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, start_time: float | None,

@@ -974,4 +974,10 @@ def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str]
 def _settle(job: VideoJob, result: TaskOutcome) -> VideoOutcome:
     if result.ok:
         return result.value
-    return VideoOutcome(job.label, "failed", result.error)
+    # The job's paths are absolute (a worker's current folder may differ); the line names the video as given and
+    # the outputs below the current folder as a single run does.
+    error = result.error.replace(f"'{job.video}'", f"'{job.label}'")
+    here = Path.cwd()
+    if here != Path(here.anchor):
+        error = error.replace(f"'{here}{os.sep}", "'")
+    return VideoOutcome(job.label, "failed", error)

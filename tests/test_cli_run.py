@@ -377,8 +377,14 @@ BAD = {
     "csv-name-too-long": (None, ["--csv", "c" * 300 + ".csv"], 1, ["the name 'cccc", "304 bytes"]),
     "output-folder-is-a-file": (None, ["--csv", "{video}/out.csv"], 1, ["not a folder"]),
     # A folder for -o is said as for --csv (it was click's "is a directory", exit 2).
-    "out-is-a-folder": (None, ["--out", "."], 1, ["cannot write output video '.': it is a folder"]),
+    "out-is-a-folder": (None, ["--out", "."], 1, ["cannot write output video '.': it is a folder; give a file name "
+                                                  "(outputs go into a folder with --out-dir .)"]),
     "csv-is-a-folder": (None, ["--csv", "."], 1, ["cannot write output CSV '.': it is a folder"]),
+    # A folder to be made: '-o out/' lost its slash and was "unsupported extension ''" (exit 2).
+    "out-names-a-folder": (None, ["--out", "out/"], 1, ["cannot write output video 'out/': it names a folder; give "
+                                                        "a file name (outputs go into a folder with --out-dir out)"]),
+    "csv-names-a-folder": (None, ["--csv", "out/"], 1, ["cannot write output CSV 'out/': it names a folder; give a "
+                                                        "file name (outputs go into a folder with --out-dir out)"]),
     "out-dir-is-a-file": (None, ["--out-dir", "{video}"], 1, ["tiny.mp4' is a file, not a folder"]),
     "out-dir-below-a-file": (None, ["--out-dir", "{video}/sub"], 1, ["tiny.mp4' is a file, not a folder"]),
     "csv-is-the-roi-file": (None, ["--csv", "{roi}", "--no-video", "--overwrite"], 1,
@@ -779,6 +785,18 @@ def test_unknown_command_is_one_house_line():
     # click's own words: "No such option '--bogus'." from click 8.2, "No such option: --bogus" in 8.1.
     assert result.stderr in ("lptrack: error: No such option '--bogus'. (see 'lptrack --help')\n",
                              "lptrack: error: No such option: --bogus (see 'lptrack --help')\n")
+
+
+def test_a_video_whose_name_starts_with_a_dash_is_told_how_to_name_it(tiny_video, workdir):
+    shutil.copy(tiny_video.path, workdir / "-clip.mp4")
+    result = invoke("-clip.mp4", "--roi", "80,60,20")
+    assert result.exit_code == 2 and listing(workdir) == ["-clip.mp4"]
+    assert result.stderr.startswith("lptrack: error: No such option")
+    assert result.stderr.endswith("; for the file '-clip.mp4' give ./-clip.mp4 or -- -clip.mp4 (see 'lptrack run "
+                                  "--help')\n")
+    result = invoke("--roi", "80,60,20", "--no-video", "--", "-clip.mp4")
+    assert result.exit_code == 0 and listing(workdir) == ["-clip.lptrack.csv", "-clip.mp4"]
+    assert "for the file" not in invoke("-x", tiny_video.path).stderr  # an option mistyped, no such file
 
 
 def test_cli_keeps_opencv_warnings_off_stderr():

@@ -175,11 +175,20 @@ class OneLineErrors(click.Command):
     """A command whose argument errors are one ``lptrack: error:`` line (exit 2), not click's usage block."""
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+        given = list(args)  # click's parser takes them off the list
         try:
             with help_to_stdout():
                 return super().parse_args(ctx, args)
         except click.UsageError as exc:
-            raise UsageError(f"{exc.format_message()} (see 'lptrack {self.name} --help')") from None
+            message = exc.format_message()
+            if isinstance(exc, click.NoSuchOption):
+                # `lptrack run -clip.mp4`: a file whose name starts with '-' reads as options ("No such option
+                # '-c'"); as for ls or rm, it is named ./-clip.mp4 or after --.
+                named = next((arg for arg in given if arg.startswith("-") and arg != "-" and os.path.exists(arg)),
+                             None)
+                if named is not None:
+                    message = message.rstrip(".") + f"; for the file '{named}' give ./{named} or -- {named}"
+            raise UsageError(f"{message} (see 'lptrack {self.name} --help')") from None
 
 
 def _to_devnull(stream) -> None:

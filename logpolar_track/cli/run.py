@@ -8,6 +8,7 @@ processes or on a Dask cluster, one failing video never stops the others, and a 
 from __future__ import annotations
 
 import contextlib
+import os
 import select
 import sys
 import textwrap
@@ -153,7 +154,7 @@ Examples:
 @click.option("--fps", type=FrameRate(), default=None, metavar="RATE",
               help="Frames per second of the input, for time_s and the annotated video, as FFmpeg's -framerate: "
                    "an image sequence's (it has none: 25 is assumed), or instead of a video's own.")
-@click.option("--out", "-o", "video_out", type=PathParam(path_type=Path), metavar="VIDEO_OUT",
+@click.option("--out", "-o", "video_out", type=PathParam(), metavar="VIDEO_OUT",
               help=f"Annotated video to write (one input only). Default: <video stem>{VIDEO_OUT_SUFFIX}. "
                    f"Extension .mp4/.m4v/.mov (mp4v), .avi (MJPG), .mkv or .webm; falls back to MJPG .avi.")
 @click.option("--csv", "csv_out", metavar="CSV_OUT", type=PathParam(),
@@ -182,7 +183,7 @@ Examples:
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary on stderr (failures still).")
 def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tracker: str,
         params: tuple[str, ...], start_frame: int, start_time: float | None, max_frames: int | None, fps: float | None,
-        video_out: Path | None, csv_out: str | None, out_dir: Path | None, parents: bool, data_format: str,
+        video_out: str | None, csv_out: str | None, out_dir: Path | None, parents: bool, data_format: str,
         no_video: bool, overwrite: bool, skip_existing: bool, jobs: int | None, scheduler: str | None,
         quiet: bool) -> None:
     """Track the object inside a circle or ellipse through VIDEO (or many).
@@ -197,6 +198,9 @@ def run(videos: tuple[str, ...], roi_spec: str | None, roi_file: Path | None, tr
     existing files are kept unless --overwrite is given.
     """
     roi = None if roi_spec is None else parse_roi_option(roi_spec)
+    _refuse_folder_as_file(video_out, "output video")
+    _refuse_folder_as_file(csv_out, "output CSV")
+    video_out = None if video_out is None else Path(video_out)
     suffix = Path(csv_out).suffix.lower() if csv_out else ""
     if data_format is None:
         data_format = "jsonl" if suffix == FORMATS["jsonl"] else "csv"
@@ -332,6 +336,17 @@ def _refuse_still_images(inputs) -> None:
     raise UsageError(f"'{stills[0]}' and {counted(len(stills) - 1, 'other input')} are still images, each of which "
                      f"would be tracked as a video of one frame; give an image sequence as its images' pattern, "
                      f"quoted so that the shell leaves it alone, e.g. '{pattern}'")
+
+
+def _refuse_folder_as_file(name: str | None, what: str) -> None:
+    """Refuse a folder given to ``-o`` or ``--csv`` (``--csv out/``, ``-o tracks``), with ``--out-dir`` as the hint:
+    the file's check said "it is a folder" alone, and ``-o out/`` lost its slash to a path and was "unsupported
+    extension ''"."""
+    if name is None or name == "-" or not (name.endswith(("/", os.sep)) or os.path.isdir(name)):
+        return
+    folder = name.rstrip("/" + os.sep) or name
+    raise OutputError(f"cannot write {what} '{name}': it {'is' if os.path.isdir(name) else 'names'} a folder; give a "
+                      f"file name (outputs go into a folder with --out-dir {folder})")
 
 
 def _check_out_dir(out_dir: Path | None, *, video_out: Path | None, csv_out: str | None, no_video: bool,

@@ -27,7 +27,7 @@ from typing import Callable, Iterable, Mapping
 import numpy as np
 
 from . import __version__
-from .datasets import SEARCH_DEPTH, Sequence, discover, discover_one, load_ground_truth
+from .datasets import SEARCH_DEPTH, Sequence, discover, discover_one, ground_truth_file, load_ground_truth
 from .errors import OutputError, RoiError, UsageError, is_whole
 from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
                        auc, no_frame_with_ground_truth, read_run_csv, score_track, success_curve)
@@ -815,11 +815,15 @@ def _first_line(path: Path) -> str:
 
 def eval_document(pred_path, gt_path, metrics: dict, *, per_frame: bool = True, video=None) -> dict:
     """JSON-ready document of ``lptrack eval``: inputs, metric constants and every metric; with ``video``, the video
-    whose rows of a batch's stream were scored (``"video"``)."""
+    whose rows of a batch's stream were scored (``"video"``). ``"ground_truth"`` is ``gt_path`` as given;
+    ``"ground_truth_file"``, where it differs, the file read for it (a video's ``.gt.csv``, a sequence folder's
+    ``groundtruth_rect.txt``)."""
     kept = metrics if per_frame else {k: v for k, v in metrics.items() if k not in PER_FRAME_KEYS}
     chosen = {} if video is None else {"video": str(video)}
+    read = ground_truth_file(gt_path)
+    read_from = {} if read == Path(gt_path) else {"ground_truth_file": str(read)}
     return _clean({"schema_version": SCHEMA_VERSION, "tool": "lptrack eval", "prediction": str(pred_path), **chosen,
-                   "ground_truth": str(gt_path), "success_radius_fraction": SUCCESS_RADIUS_FRACTION,
+                   "ground_truth": str(gt_path), **read_from, "success_radius_fraction": SUCCESS_RADIUS_FRACTION,
                    "precision_px": PRECISION_PX, "metrics": kept})
 
 

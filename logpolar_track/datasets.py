@@ -456,6 +456,15 @@ def load_ground_truth(path) -> GroundTruth:
                               "groundtruth.txt, <name>.txt)").gt
 
 
+def ground_truth_file(path) -> Path:
+    """The file :func:`load_ground_truth` reads for ``path``: ``path`` itself, or the ground-truth file of the
+    sequence folder or video it names."""
+    path = Path(path)
+    if path.is_file() and path.suffix.lower() not in VIDEO_EXTENSIONS:
+        return path
+    return discover_one(path, "give one sequence folder or ground-truth file").gt_path
+
+
 def discover_one(path, expected: str) -> Sequence:
     """The one sequence in ``path`` (:func:`discover`).
 
@@ -474,4 +483,5 @@ def discover_one(path, expected: str) -> Sequence:
 
 
 __all__ = ["Sequence", "discover", "discover_one", "sequences_in", "video_sequence", "load_ground_truth",
+           "ground_truth_file",
            "GroundTruthError", "IMAGE_FPS"]

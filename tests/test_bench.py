@@ -781,6 +781,12 @@ def test_eval_scores_a_run_csv(dataset, tmp_path):
     assert m["frames_scored"] == N_FRAMES and m["centre_error_median_px"] == pytest.approx(5.0, abs=1e-3)
     assert m["rotation_error_median_deg"] == pytest.approx(0, abs=1e-3)
     assert m["success_rate"] == 0.0  # 5 px >= 25 % of the radius sqrt(18*14) * scale <= 15.9 * 1.15 px
+    assert "ground_truth_file" not in json.loads(res.stdout)
+    # The ground truth given as the video: the file read for it is named too.
+    document = json.loads(_run("eval", pred, dataset / "alpha.avi", "--json", "-").stdout)
+    assert document["metrics"]["centre_error_median_px"] == pytest.approx(5.0, abs=1e-3)
+    assert (document["ground_truth"], document["ground_truth_file"]) == (str(dataset / "alpha.avi"),
+                                                                         str(dataset / "alpha.gt.csv"))
     res = _run("eval", pred, dataset)  # a folder with two sequences is ambiguous
     assert res.exit_code == 2 and "2 sequences" in res.stderr
     _write_run_csv(pred, truth)

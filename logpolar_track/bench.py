@@ -30,7 +30,8 @@ from . import __version__
 from .datasets import SEARCH_DEPTH, Sequence, discover, discover_one, ground_truth_file, load_ground_truth
 from .errors import OutputError, RoiError, UsageError, is_whole
 from .evaluate import (IOU_THRESHOLDS, PRECISION_PX, PRECISION_THRESHOLDS, SUCCESS_RADIUS_FRACTION, Track,
-                       auc, no_frame_with_ground_truth, read_run_csv, score_track, success_curve)
+                       auc, no_frame_with_ground_truth, read_run_csv, rows_past_ground_truth, score_track,
+                       success_curve)
 from .executor import TRACKING_OPENCV_THREADS, describe_exception, opencv_threads, run_tasks
 from .geometry import Ellipse
 from .outputs import check_image_suffix, written_into_place
@@ -774,12 +775,11 @@ def evaluate_stream_run(prediction, ground_truth, *, video=None) -> tuple[dict, 
         total = metrics["frames_scored"] + metrics["frames_missing"]
         notes.append(f"'{prediction}' has no row for {metrics['frames_missing']} of the {total} frames with ground "
                      f"truth; they are not scored")
-    # The other way round too: a ground truth cut short, or another sequence's, scored part of the run in silence.
-    beyond = int((track.frames >= len(gt)).sum())
-    if beyond:
-        notes.append(f"{beyond} of the {len(track.frames)} rows of '{prediction}' {'lies' if beyond == 1 else 'lie'} "
-                     f"past the end of '{ground_truth}' ({len(gt)} frames); they are not scored (is it this video's "
-                     f"ground truth?)")
+    past = rows_past_ground_truth(f"'{prediction}'", track.frames, gt, f"'{ground_truth}'")
+    if past is not None:
+        # The other way round from the rows missing: a ground truth cut short, or another sequence's, scored part of
+        # the run in silence.
+        notes.append(f"{past}; they are not scored (is it this video's ground truth?)")
     return metrics, notes, table.video
 
 

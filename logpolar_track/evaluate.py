@@ -66,7 +66,7 @@ from typing import Iterable
 
 import numpy as np
 
-from .errors import GroundTruthError, UsageError, is_real
+from .errors import GroundTruthError, UsageError, counted, is_real
 from .geometry import Ellipse, ellipse_in_rotated_rect, parse_number
 from .results import COLUMNS, VIDEO_COLUMN, FrameResult, decode_text, off_contract, read_data_rows
 from .trackers.base import TrackState
@@ -739,6 +739,17 @@ def no_frame_with_ground_truth(run: str, ground_truth: str) -> UsageError:
     starts): ``run`` and ``ground_truth`` as the message names them (quoted paths, say)."""
     return UsageError(f"no frame of {run} has ground truth in {ground_truth} (frames are matched by index, 0 = first "
                       f"frame)")
+
+
+def rows_past_ground_truth(run: str, frames: np.ndarray, gt: GroundTruth, ground_truth: str) -> str | None:
+    """The start of a note on the rows of a run whose ``frames`` lie past the end of ``gt`` (a ground truth cut
+    short, or another sequence's, scored or plotted part of the run in silence), or None; ``run`` and
+    ``ground_truth`` as the note names them (quoted paths, say)."""
+    beyond = int((np.asarray(frames) >= len(gt)).sum())
+    if not beyond:
+        return None
+    return (f"{beyond} of the {len(frames)} rows of {run} {'lies' if beyond == 1 else 'lie'} past the end of "
+            f"{ground_truth} ({counted(len(gt), 'frame')})")
 
 
 def several_videos(path, names: list[str], video=None) -> GroundTruthError:

@@ -1021,6 +1021,10 @@ def test_plot_refuses_ground_truth_without_a_frame_of_the_run_as_eval_does(tiny_
     assert invoke("eval", late, short).exit_code == 2  # as eval says
     result = invoke("plot", run_csv, "-o", out, "--gt", short, "--no-video")  # one frame in common: drawn
     assert result.exit_code == 0, result.stderr
+    # and the rows past its end noted, as eval notes them (the error panel ends there).
+    n = len(rows) - 1
+    assert result.stderr == (f"lptrack: note: {n - 1} of the {n} rows of '{run_csv}' lie past the end of '{short}' "
+                             f"(1 frame); they have no ground truth to plot (is it this video's ground truth?)\n")
 
 
 @needs_matplotlib

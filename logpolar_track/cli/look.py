@@ -13,8 +13,9 @@ from pathlib import Path
 import click
 
 from ..contact_sheet import SHEET_ROWS, write_contact_sheet
+from ..datasets import load_ground_truth
 from ..errors import UsageError
-from ..evaluate import read_run_csv
+from ..evaluate import read_run_csv, rows_past_ground_truth
 from ..frame_png import write_frame_png
 from ..geometry import check_roi_fits
 from ..outputs import check_image_suffix
@@ -232,6 +233,11 @@ def plot(run_csv: Path, out_png: Path | None, gt_path: Path | None, video: Path 
             note = (f"lptrack: note: no thumbnail: {why}; give the tracked video with --video VIDEO (or --no-video "
                     f"for blank axes)")
     path = plot_track(table, out_png, video=video, ground_truth=gt_path, overwrite=overwrite)
+    past = None if gt_path is None else rows_past_ground_truth(f"'{run_csv}'", table.frames,
+                                                                load_ground_truth(gt_path), f"'{gt_path}'")
+    if past is not None and not quiet:  # as 'lptrack eval' notes them: the error panel ends there
+        click.echo(f"lptrack: note: {past}; they have no ground truth to plot (is it this video's ground truth?)",
+                   err=True)
     if note is not None and not quiet:
         click.echo(note, err=True)  # after the plot, so that a failure is one error line, not a note before it
     write_stdout(str(path) + "\n")

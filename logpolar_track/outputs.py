@@ -22,7 +22,7 @@ from .errors import OutputError, UsageError
 #: Bytes in a file name most file systems take (ext4, XFS, APFS, NTFS's 255 UTF-16 units are more).
 _NAME_MAX = 255
 
-T = TypeVar("T")
+_Result = TypeVar("_Result")
 
 
 def temporary_path(path: Path, *, pid: int | None = None) -> Path:
@@ -149,7 +149,8 @@ def make_output_folder(folder) -> list[Path]:
 _FOLDER_ATTEMPTS = 3
 
 
-def run_in_output_folders(folders, work: Callable[[], T], *, retry: bool = True, remove_made: bool = True) -> T:
+def run_in_output_folders(folders, work: Callable[[], _Result], *, retry: bool = True,
+                          remove_made: bool = True) -> _Result:
     """Make ``folders`` (:func:`make_output_folder`) and return ``work()``, which writes its outputs into them.
 
     Parallel runs into one folder (``xargs -P``, several ``lptrack run`` at once) each make it if it is missing,

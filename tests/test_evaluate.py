@@ -10,10 +10,10 @@ import pytest
 
 from logpolar_track.errors import UsageError
 from logpolar_track.evaluate import (GroundTruth, GroundTruthError, Track, auc, box_iou, ground_truth_from_boxes,
-                                     ground_truth_from_ellipses, precision_curve, read_box_text, read_gt_csv,
-                                     read_run_csv, read_track_csv, rect_from_polygon, rotated_box_corners,
-                                     rotated_box_iou, rotation_errors, scale_errors, score_track, success_curve,
-                                     success_rate, unwrap_rects)
+                                     ground_truth_from_ellipses, ground_truth_from_rects, precision_curve,
+                                     read_box_text, read_gt_csv, read_run_csv, read_track_csv, rect_from_polygon,
+                                     rotated_box_corners, rotated_box_iou, rotated_to_aabb, rotation_errors,
+                                     scale_errors, score_track, success_curve, success_rate, unwrap_rects)
 
 
 # ---------------------------------------------------------------------------------------------- IoU
@@ -468,3 +468,17 @@ def test_ground_truth_reversed_is_relative_to_its_new_first_row():
     np.testing.assert_allclose(back.rotation_deg[1:], [0.0, -20.0, -50.0])
     assert (back.rotated, back.rotation_period, back.source) == (True, 180.0, "vot")
     assert back.reversed().boxes[:3].tolist() == gt.boxes[:3].tolist()
+
+
+def test_an_ellipse_is_scored_as_a_region_its_bounding_box_against_axis_aligned_ground_truth():
+    # The convention the README states ("An ellipse against a box"): a rectangle 80 x 20 turned 30 degrees, tracked
+    # perfectly by its inscribed ellipse, scores IoU 1 against the rotated rectangle (VOT) and, as the ellipse's own
+    # axis-aligned bounding box (69.9 x 43.6 px), 0.67 against the rectangle's axis-aligned box (OTB: 79.3 x 57.3).
+    rect = np.array([[100.0, 100, 80, 20, 30]])
+    track = _ellipse_track([[100.0, 100, 40, 10, 30]], [1.0], [0.0])
+    assert score_track(ground_truth_from_rects(rect), track)["iou"][0] == pytest.approx(1.0)
+    aabb = rotated_to_aabb(rect)
+    ellipse_box = 2 * math.sqrt(40**2 * 0.75 + 10**2 * 0.25) * 2 * math.sqrt(40**2 * 0.25 + 10**2 * 0.75)
+    expected = ellipse_box / (aabb[0, 2] * aabb[0, 3])  # the ellipse's box lies inside the rectangle's
+    assert score_track(ground_truth_from_boxes(aabb), track)["iou"][0] == pytest.approx(expected, rel=1e-6)
+    assert expected == pytest.approx(0.671, abs=0.001)

@@ -550,6 +550,8 @@ class VideoReader:
         self._previous_stamp: float | None = None  # the last decoded frame's stamp (seconds), see _grab_next
         self._unplaced = 0  # failed grabs whose lost frames no gap in the stamps has shown yet
         self._interval: float | None = None  # seconds between the last two frames decoded in a row
+        self._steady = True  # whether every interval between frames decoded in a row so far was the container's
+        self._damaged = False  # whether a grab has failed (a packet FFmpeg refused)
         self.timestamps_from: int | None = None
         self._last_time = -math.inf
         self._stamp_offset: float | None = None
@@ -660,21 +662,33 @@ class VideoReader:
         reported the failures for frames 69-75 before frames 67 and 68. So a failure is not counted as a frame; it
         says that frames are missing, and the presentation timestamps say which: the first frame after
         failures whose stamp lies more than a frame after the previous one's is numbered by the gap, at the
-        container's rate (or a varying rate's last interval), up to a frame per failure. Without failures a gap is
-        a varying rate, not damage (a phone that skipped frames: they are not in the file), and the number goes up
-        by one; so are frames dropped without a failure (MPEG-TS damage: none is reported).
+        container's rate (or a varying rate's last interval): all of it where every interval so far was the
+        container's (a steady rate), up to a frame per failure where the rate has varied. Without failures a gap
+        is a varying rate, not damage (a phone that skipped frames: they are not in the file), and the number goes
+        up by one; so are frames dropped without a failure (MPEG-TS damage: none is reported). After damage at a
+        steady rate, though, every gap is lost frames, and a picture stamped half a frame or more before the last
+        one's (a lost frame's, out of order) is left out.
         Without stamps (a container reporting no frame rate) each failure counts as a frame. Failures that no gap
         follows (a file cut short in a packet, the frames held still coming out) lost no frame before the end.
 
         Up to :data:`MAX_UNDECODABLE_RUN` failures in a row, or failures past the frames the container announces,
         end the video there (cut short)."""
         failed = 0
-        while not self._cap.grab():  # releases the GIL while FFmpeg decodes
-            failed += 1
-            if not (number + failed < self.frame_count and failed < MAX_UNDECODABLE_RUN):
-                return None
-        stamp = self._frame_stamp()
-        previous, self._previous_stamp = self._previous_stamp, stamp
+        while True:
+            while not self._cap.grab():  # releases the GIL while FFmpeg decodes
+                failed += 1
+                if not (number + failed < self.frame_count and failed < MAX_UNDECODABLE_RUN):
+                    return None
+            stamp = self._frame_stamp()
+            self._damaged = self._damaged or failed > 0
+            previous = self._previous_stamp
+            # After damage at a steady rate, a picture stamped half a frame or more before the last one is a
+            # frame already passed, come out of order (H.264 with B-frames: frame 8's after frames 16 and 17, when
+            # 9-15 were lost); numbered on, it put every later frame one number late. It is left out.
+            if not (self._damaged and self._steady and stamp is not None and previous is not None
+                    and stamp < previous - 0.5 / self._stream_fps):
+                break
+        self._previous_stamp = stamp
         self._unplaced += failed
         if stamp is None:  # no stamps: each failure counts as a frame
             number, self._unplaced = number + self._unplaced, 0
@@ -682,17 +696,22 @@ class VideoReader:
         # A frame lasts 1 / the container's rate, exact for a constant rate (stamps rounded to milliseconds, as in
         # MKV, stay within 10 % and 1.5 ms of it); a varying one reports its average, 18.75 fps for 25 with a pause,
         # and the interval between its last two frames counts frames better (3 lost at 25 fps, not 2).
-        lasts = 1.0 / self._stream_fps
-        if self._interval is not None and abs(self._interval - lasts) > max(0.1 * lasts, 0.0015):
+        lasts = nominal = 1.0 / self._stream_fps
+        if self._interval is not None and abs(self._interval - nominal) > max(0.1 * nominal, 0.0015):
             lasts = self._interval
         frames_apart = round((stamp - (-lasts if previous is None else previous)) / lasts)  # frame 0 is at 0
-        if self._unplaced and frames_apart > 1:
-            # At most a frame per failure: a varying rate's pause within the decoder's delay after a failure is not
-            # lost frames, and failures left over go to the next gap. Before the first frame, all of it.
-            lost = frames_apart - 1 if previous is None else min(frames_apart - 1, self._unplaced)
+        steady_damage = self._damaged and self._steady
+        if (self._unplaced or steady_damage) and frames_apart > 1:
+            # At most a frame per failure where the rate has varied: its pause within the decoder's delay after a
+            # failure is not lost frames, and failures left over go to the next gap. At a steady rate, and before
+            # the first frame, all of the gap, and after damage every gap: one failure can take a whole group of
+            # pictures with it (H.264 without B-frames, 20 kB of a file damaged: 8 frames lost, one failure
+            # reported), and the frames it took can come out in more than one gap.
+            lost = frames_apart - 1 if previous is None or steady_damage else min(frames_apart - 1, self._unplaced)
             number, self._unplaced = number + lost, max(self._unplaced - lost, 0)
         elif previous is not None and stamp > previous:
             self._interval = stamp - previous
+            self._steady = self._steady and abs(self._interval - nominal) <= max(0.1 * nominal, 0.0015)
         return number
 
     def _frame_stamp(self) -> float | None:

@@ -132,6 +132,32 @@ def test_frames_after_damaged_h264_keep_their_numbers_and_times():
     assert all(shown[i] == i for i in shown if not 12 <= i <= 19)
 
 
+def test_frames_after_a_damaged_group_of_pictures_keep_their_numbers():
+    """H.264 without B-frames, 200 bytes garbled in frame 7's group of pictures: frames 7-15 are lost, but FFmpeg
+    refuses 4 packets. At most a frame per refusal numbered frame 16 as 11, and every later frame 5 numbers (0.2 s)
+    early; at a steady rate the timestamps' gap is trusted in full."""
+    with VideoReader(DATA / "damaged_gop_h264.mp4") as reader:
+        items = list(reader)
+    assert [i for i, _, _ in items] == [*range(7), *range(16, 40)]
+    assert reader.undecodable == [(7, 9)]
+    assert all(t == pytest.approx(i / 25) for i, t, _ in items)
+    assert reader.timestamps_from is None  # the steady rate kept, no "rate varies"
+    # Each shows its number, but for those FFmpeg conceals until the key frame at 20 (6: the damage starts in it).
+    shown = {i: shown_number(frame) for i, _, frame in items}
+    assert all(shown[i] == i for i in shown if not 6 <= i < 20)
+
+
+def test_a_lost_frames_picture_out_of_order_is_left_out():
+    """H.264 with B-frames, 400 bytes garbled: frames 9-17 lost, and after frame 18 comes a picture stamped as frame
+    9, then 19. Numbered on, it was "19" and every later frame one number late (the last, 39, as 40)."""
+    with VideoReader(DATA / "damaged_late_h264.mp4") as reader:
+        items = list(reader)
+    assert [i for i, _, _ in items] == [*range(9), *range(18, 40)]
+    assert reader.undecodable == [(9, 9)]
+    shown = {i: shown_number(frame) for i, _, frame in items}
+    assert all(shown[i] == i for i in shown if not 18 <= i < 20)  # 18, 19: concealed until the key frame at 20
+
+
 def test_a_start_frame_of_damaged_h264_is_that_frame():
     """From a start frame the same numbers: frame 20 is 20's picture, frame 13 is followed by 19, and a lost frame
     is refused, naming the lost ones (frame 13 was refused as "damaged at frames 13-16", and frame 17 was 12's

@@ -11,8 +11,13 @@ does. FFmpeg refuses them as OpenCV reads them, before the frames its decoder st
 numbered frames 9-13 as 10-12, 17 and 18. truncated_h264.mp4: counter_h264.mp4's first 70 % of bytes, cut in the
 packet of key frame 20; its refusal came before frames 18 and 19, numbered 19 and 20. damaged_vfr_h264.mp4: a
 varying rate (see main), whose lost frames were counted at its average rate: 2 where 3 are lost.
+damaged_gop_h264.mp4: counter_h264.mp4's frames without B-frames, 200 bytes at 2262 overwritten with seeded random
+bytes (made with the FFmpeg 9.0 of the imageio-ffmpeg wheel): frames 7-15 lost for 4 refusals, numbered 11 on when
+each refusal counted at most a frame. damaged_late_h264.mp4: counter_h264.mp4 with 400 bytes at 2702 garbled
+likewise: frames 9-17 lost, and frame 9's picture comes out after 18's, which numbered every later frame one late.
 """
 
+import random
 import subprocess
 from pathlib import Path
 
@@ -33,9 +38,10 @@ def frames():
         yield np.repeat(frame[:, :, None], 3, axis=2)
 
 
-def encode(raw: bytes, out: str, *filters: str) -> None:
+def encode(raw: bytes, out: str, *filters: str, b_frames: int = 3) -> None:
     subprocess.run(["ffmpeg", "-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "bgr24", "-s", f"{W}x{H}", "-r",
-                    str(FPS), "-i", "-", *filters, "-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "28", "-bf", "3",
+                    str(FPS), "-i", "-", *filters, "-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "28", "-bf",
+                    str(b_frames),
                     "-g", "10", "-keyint_min", "10", "-sc_threshold", "0", "-movflags", "+faststart", out],
                    input=raw, check=True)
 
@@ -64,6 +70,21 @@ def main():
     encode(raw, "vfr.tmp.mp4", "-vf", "select='not(between(n,10,19))'", "-fps_mode", "passthrough")
     zero_packets("vfr.tmp.mp4", range(33, 36), "damaged_vfr_h264.mp4")
     Path("vfr.tmp.mp4").unlink()
+    # Stretches of bytes garbled (not packets zeroed): without B-frames fewer refusals than frames lost; with them
+    # also a lost frame's picture out of order.
+    encode(raw, "gop.tmp.mp4", b_frames=0)
+    garble("gop.tmp.mp4", 87, 2262, 200, "damaged_gop_h264.mp4")
+    Path("gop.tmp.mp4").unlink()
+    garble("counter_h264.mp4", 77, 2702, 400, "damaged_late_h264.mp4")
+
+
+def garble(path: str, seed: int, start: int, length: int, out: str) -> None:
+    """``path`` with ``length`` bytes from ``start`` overwritten with random bytes of ``seed``, into ``out``."""
+    data = bytearray(Path(path).read_bytes())
+    rnd = random.Random(seed)
+    rnd.randrange(len(data) // 3, len(data) - 300), rnd.choice([100, 200, 400, 800])  # the draws that chose these
+    data[start:start + length] = bytes(rnd.randrange(256) for _ in range(length))
+    Path(out).write_bytes(data)
 
 
 if __name__ == "__main__":

@@ -12,7 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .draw import draw_grid, draw_roi
-from .geometry import Ellipse, check_roi_fits
+from .geometry import Ellipse, as_ellipse, check_roi_fits
 from .outputs import check_image_suffix, check_output_path, write_png
 from .video import read_frame, video_stem
 
@@ -26,7 +26,7 @@ def default_frame_png(video_path, index: int, folder=".", roi: Ellipse | None = 
 
 
 def write_frame_png(video_path, out_png=None, *, index: int | None = None, time_s: float | None = None,
-                    grid: int = 50, roi: Ellipse | None = None, overwrite: bool = False,
+                    grid: int = 50, roi: Ellipse | str | None = None, overwrite: bool = False,
                     fps: float | None = None) -> Path:
     """What ``lptrack frame`` does: frame ``index`` (or at ``time_s``) with a grid and an optional ROI, as PNG.
 
@@ -39,8 +39,9 @@ def write_frame_png(video_path, out_png=None, *, index: int | None = None, time_
         See :func:`~logpolar_track.video.read_frame`.
     grid : int
         Grid step in pixels (0: none).
-    roi : Ellipse, optional
-        Candidate ROI to draw; checked against the frame as ``lptrack run`` checks it.
+    roi : Ellipse, str or sequence of float, optional
+        Candidate ROI to draw (an :class:`~logpolar_track.geometry.Ellipse`, a ``--roi`` string or its numbers, as
+        :func:`~logpolar_track.draw.draw_roi` takes it); checked against the frame as ``lptrack run`` checks it.
     overwrite : bool
 
     Returns
@@ -48,6 +49,7 @@ def write_frame_png(video_path, out_png=None, *, index: int | None = None, time_
     Path
         The PNG written; same width and height as the frame.
     """
+    roi = None if roi is None else as_ellipse(roi)
     frame = read_frame(video_path, index, time_s=time_s, fps=fps)
     out_png = default_frame_png(video_path, frame.index, roi=roi) if out_png is None else Path(out_png)
     check_image_suffix(out_png, (".png",), "output image")

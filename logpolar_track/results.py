@@ -78,7 +78,9 @@ class FrameResult:
     frame : int
         Frame index in the video file (0 = its first frame).
     time_s : float
-        Nominal time of the frame in seconds (``frame / fps``).
+        Time of the frame in seconds: ``frame / fps``, or for a video whose frame rate varies its timestamp, from
+        the first frame where they part (:attr:`VideoReader.timestamps_from
+        <logpolar_track.video.VideoReader.timestamps_from>`).
     state : TrackState
         The tracker's state: ellipse (pixels), scale (1 at init), rotation (deg CCW, cumulative, or None),
         score in [0, 1]. For a lost frame, the last good geometry with this frame's score.

@@ -7,7 +7,8 @@ too, and writes to a temporary name that is renamed only when the video is compl
 leaves a file that looks finished.
 
 Frames are BGR ``uint8`` arrays of shape ``(height, width, 3)`` as OpenCV decodes them. Frame indexes count
-from 0 at the first frame of the file; ``time_s = index / fps`` (the nominal time of a constant-rate video).
+from 0 at the first frame of the file; ``time_s = index / fps`` (the nominal time of a constant-rate video), or a
+varying rate's timestamps (:meth:`VideoReader.time_of`).
 :func:`read_frame` gives exactly the N-th decoded frame (or the frame at a time) as a :class:`Frame`, and
 :func:`count_frames` the number of frames by decoding them all.
 
@@ -848,7 +849,8 @@ class Frame:
     index : int
         Frame index in the file (0 = first frame).
     time_s : float
-        Nominal time ``index / fps`` in seconds.
+        Time in seconds: ``index / fps``, or for a video whose frame rate varies its timestamp
+        (:meth:`VideoReader.time_of`).
     fps : float
         Frame rate the container reports (25 if it reports none; then ``fps_guessed``).
     fps_guessed : bool

@@ -28,6 +28,7 @@ from logpolar_track.contact_sheet import sheet_geometry, write_contact_sheet
 from logpolar_track.draw import GRID_COLOUR, draw_grid
 from logpolar_track.errors import RoiError, UsageError
 from logpolar_track.evaluate import GroundTruthError, read_box_text, read_run_csv, read_track_csv
+from logpolar_track.frame_png import write_frame_png
 from logpolar_track.geometry import Ellipse, parse_roi
 from logpolar_track.pipeline import find_video_for_csv
 from logpolar_track.plot import PLOT_DPI, PLOT_SIZE_IN
@@ -141,6 +142,19 @@ def test_frame_with_each_candidate_roi_gets_a_name_of_its_own(tiny_video, tmp_pa
     assert names == ["tiny.frame0.png", "tiny.frame0.roi_80_60_20.png", "tiny.frame0.roi_80.5_60_20_12_30.png"]
     assert all((tmp_path / name).is_file() for name in names)
     assert "already exists" in one_error_line(invoke("frame", tiny_video.path, "--roi", "80,60,20"), 1)
+
+
+def test_write_frame_png_takes_a_roi_as_the_rest_of_the_api_does(tiny_video, tmp_path, monkeypatch):
+    """A --roi string or its numbers, as draw_roi and a tracker's init take them (a string raised AttributeError)."""
+    monkeypatch.chdir(tmp_path)
+    as_text = write_frame_png(tiny_video.path, "text.png", index=3, roi="80,60,20")
+    as_numbers = write_frame_png(tiny_video.path, "numbers.png", index=3, roi=(80, 60, 20))
+    as_ellipse = write_frame_png(tiny_video.path, "ellipse.png", index=3, roi=Ellipse(80, 60, 20, 20, 0))
+    assert np.array_equal(cv2.imread(str(as_text)), cv2.imread(str(as_ellipse)))
+    assert np.array_equal(cv2.imread(str(as_numbers)), cv2.imread(str(as_ellipse)))
+    assert write_frame_png(tiny_video.path, index=3, roi="80,60,20").name == "tiny.frame3.roi_80_60_20.png"
+    with pytest.raises(RoiError, match="has 2 numbers"):
+        write_frame_png(tiny_video.path, "bad.png", index=3, roi="80,60")
 
 
 def test_frame_command_writes_the_exact_frame(tiny_video, tmp_path, monkeypatch):

@@ -387,7 +387,7 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, vid
     video = None if streamed is None else scored_video(ground_truth, video)
     for note in [] if quiet else notes:
         click.echo(f"lptrack: note: {note}", err=True)
-    row = {"sequence": prediction.name, "tracker": "(csv)", **metrics}
+    row = {"sequence": prediction.name, "tracker": "(run)", **metrics}
     table = format_table([row], [], speed=False)
     if json_out is None:
         write_stdout(table)

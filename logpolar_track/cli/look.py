@@ -254,7 +254,8 @@ Examples:
 @click.option("-o", "--out", "out_png", type=PathParam(dir_okay=False, path_type=Path), metavar="PNG",
               help="PNG to write. Default: RUN.csv's name with .sheet.png for its extension "
                    "(clip.lptrack.sheet.png), in the current folder.")
-@click.option("--cols", type=WholeNumber(min=1, max=64), default=4, show_default=True, help="Columns.")
+@click.option("--cols", type=WholeNumber(min=1, max=64), default=4, show_default=True, metavar="N",
+              help="Columns.")
 @click.option("--rows", type=WholeNumber(min=1, max=64), default=None, metavar="N",
               help=f"Rows: --cols x N frames. Default {SHEET_ROWS}; not with --count.")
 @click.option("--count", type=WholeNumber(min=1, max=4096), metavar="N",

@@ -466,6 +466,11 @@ def frames_to_track(frame_count: int, start_frame: int, max_frames: int | None) 
     return remaining if max_frames is None else min(remaining, max_frames)
 
 
+#: Pictures after a failed grab within which a gap in the stamps at a steady rate is lost frames (the decoder's
+#: delay: its reordering and a group of pictures concealed).
+_DAMAGE_REACH = 32
+
+
 class VideoReader:
     """Frames of a video file as ``(index, time_s, frame)``, decoded ahead in a background thread.
 
@@ -553,6 +558,8 @@ class VideoReader:
         self._interval: float | None = None  # seconds between the last two frames decoded in a row
         self._steady = True  # whether every interval between frames decoded in a row so far was the container's
         self._damaged = False  # whether a grab has failed (a packet FFmpeg refused)
+        self._since_failure = 0  # pictures decoded since the last failed grab
+        self._lost_spans: list[tuple[float, float]] = []  # stamps either side of each gap numbered as lost frames
         self.timestamps_from: int | None = None
         self._last_time = -math.inf
         self._stamp_offset: float | None = None
@@ -682,12 +689,16 @@ class VideoReader:
                     return None
             stamp = self._frame_stamp()
             self._damaged = self._damaged or failed > 0
+            self._since_failure = 0 if failed else self._since_failure + 1
             previous = self._previous_stamp
             # After damage at a steady rate, a picture stamped half a frame or more before the last one is a
             # frame already passed, come out of order (H.264 with B-frames: frame 8's after frames 16 and 17, when
             # 9-15 were lost); numbered on, it put every later frame one number late. It is left out.
+            # Only a picture stamped inside a gap numbered as lost frames: stamps that jump back elsewhere (MPEG-TS
+            # files joined with cat, a stamp wrap) start again, and every later picture would be left out.
             if not (self._damaged and self._steady and stamp is not None and previous is not None
-                    and stamp < previous - 0.5 / self._stream_fps):
+                    and stamp < previous - 0.5 / self._stream_fps
+                    and any(lo < stamp < hi for lo, hi in self._lost_spans)):
                 break
         self._previous_stamp = stamp
         self._unplaced += failed
@@ -701,7 +712,9 @@ class VideoReader:
         if self._interval is not None and abs(self._interval - nominal) > max(0.1 * nominal, 0.0015):
             lasts = self._interval
         frames_apart = round((stamp - (-lasts if previous is None else previous)) / lasts)  # frame 0 is at 0
-        steady_damage = self._damaged and self._steady
+        # Damage reaches as far as the decoder's delay: a gap long after the last failure is a pause (a phone's, in a
+        # file whose average rate stays within 10 % of its frames' own), not lost frames.
+        steady_damage = self._damaged and self._steady and self._since_failure <= _DAMAGE_REACH
         if (self._unplaced or steady_damage) and frames_apart > 1:
             # At most a frame per failure where the rate has varied: its pause within the decoder's delay after a
             # failure is not lost frames, and failures left over go to the next gap. At a steady rate, and before
@@ -710,6 +723,8 @@ class VideoReader:
             # reported), and the frames it took can come out in more than one gap.
             lost = frames_apart - 1 if previous is None or steady_damage else min(frames_apart - 1, self._unplaced)
             number, self._unplaced = number + lost, max(self._unplaced - lost, 0)
+            if previous is not None:
+                self._lost_spans = [*self._lost_spans[-7:], (previous, stamp)]
         elif previous is not None and stamp > previous:
             self._interval = stamp - previous
             self._steady = self._steady and abs(self._interval - nominal) <= max(0.1 * nominal, 0.0015)

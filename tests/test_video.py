@@ -1096,3 +1096,56 @@ def test_a_video_is_given_by_its_path_not_a_camera_index():
     for path in (0, b"clip.mp4"):
         with pytest.raises(UsageError, match=r"a video is given by its file's path \(str or Path\), got "):
             VideoReader(path)
+
+
+class ScriptedCapture:
+    """A capture at 25 fps whose grabs follow ``script``: a stamp in frames of 1/25 s (a picture decoded) or None
+    (a packet FFmpeg refused); each picture shows the stamp it was scripted with (its pixel value)."""
+
+    def __init__(self, script, frame_count):
+        self.script, self.frame_count, self.stamp = list(script), frame_count, None
+
+    def isOpened(self):
+        return True
+
+    def grab(self):
+        if not self.script:
+            return False
+        self.stamp = self.script.pop(0)
+        return self.stamp is not None
+
+    def retrieve(self):
+        return True, np.full((8, 8, 3), self.stamp % 256, np.uint8)
+
+    def get(self, prop):
+        return {cv2.CAP_PROP_FPS: 25.0, cv2.CAP_PROP_FRAME_COUNT: float(self.frame_count),
+                cv2.CAP_PROP_POS_MSEC: (self.stamp or 0) * 40.0, cv2.CAP_PROP_FOURCC: float(cv2.VideoWriter_fourcc(*"avc1"))
+                }.get(prop, 0.0)
+
+    def release(self):
+        pass
+
+
+def scripted_read(monkeypatch, tmp_path, script, frame_count):
+    path = tmp_path / "scripted.ts"
+    path.write_bytes(b"\0" * 188)
+    monkeypatch.setattr(video_module, "_open_capture", lambda p: ScriptedCapture(script, frame_count))
+    with VideoReader(path) as reader:
+        return [(i, int(frame[0, 0, 0])) for i, _, frame in reader]
+
+
+def test_stamps_that_start_again_after_damage_are_not_left_out(monkeypatch, tmp_path):
+    """Two MPEG-TS files joined with cat (the second's stamps start again at 0), frame 10 of the first refused: the
+    second's pictures are not 'out of order' pictures of lost frames (all but its last were left out)."""
+    script = [*range(10), None, *range(11, 20), *range(20)]
+    items = scripted_read(monkeypatch, tmp_path, script, 40)
+    assert [shown for _, shown in items] == [*range(10), *range(11, 20), *range(20)]
+    assert [i for i, _ in items] == [*range(10), *range(11, 40)]
+
+
+def test_a_pause_long_after_damage_is_not_lost_frames(monkeypatch, tmp_path):
+    """A phone's pause (frames 60-69 not in the file, no refusal) 50 frames after a refused packet: numbered on by
+    one, as without damage, not as 10 lost frames."""
+    script = [*range(10), None, *range(11, 60), *range(70, 80)]
+    items = scripted_read(monkeypatch, tmp_path, script, 69)
+    assert [i for i, _ in items] == [*range(10), *range(11, 70)]

@@ -976,8 +976,11 @@ def _settle(job: VideoJob, result: TaskOutcome) -> VideoOutcome:
         return result.value
     # The job's paths are absolute (a worker's current folder may differ); the line names the video as given and
     # the outputs below the current folder as a single run does.
-    error = result.error.replace(f"'{job.video}'", f"'{job.label}'")
+    # Below the current folder first, then the video as given: a video given by its absolute path stays so.
+    error, video = result.error, str(job.video)
     here = Path.cwd()
     if here != Path(here.anchor):
         error = error.replace(f"'{here}{os.sep}", "'")
+        video = video.removeprefix(f"{here}{os.sep}")
+    error = error.replace(f"'{video}'", f"'{job.label}'")
     return VideoOutcome(job.label, "failed", error)

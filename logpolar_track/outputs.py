@@ -166,18 +166,37 @@ def run_in_output_folders(folders, work: Callable[[], _Result], *, retry: bool =
     folders = [Path(folder) for folder in folders]
     attempts = _FOLDER_ATTEMPTS if retry else 1
     made: list[Path] = []
+    made_again: list[Path] = []  # on a start made again: the batch's own clean-up does not know them
+    done = False
     try:
         for attempt in range(1, attempts + 1):
             for folder in folders:
-                made += make_output_folder(folder)
+                (made if attempt == 1 else made_again).extend(make_output_folder(folder))
+            found = [_identity(folder) for folder in folders]
             try:
-                return work()
+                result = work()
+                done = True
+                return result
             except OutputError:
-                if attempt >= attempts or all(folder.is_dir() for folder in folders):
+                # A folder gone, or made again by a third run before this one looks: either way not the one found.
+                if attempt >= attempts or [_identity(folder) for folder in folders] == found:
                     raise
     finally:
         if remove_made:
-            remove_empty_folders(made)
+            remove_empty_folders(made + made_again)
+        elif not done:
+            remove_empty_folders(made_again)
+
+
+def _identity(folder: Path) -> tuple[int, int] | None:
+    """Which folder ``folder`` is (None if it is missing): a folder removed and made again is another, unless the
+    file system gives it the inode just freed. Not its times: a failure's own temporary file changes them, and a
+    real error (a full disk) would be started again."""
+    try:
+        info = os.stat(folder)
+    except OSError:
+        return None
+    return info.st_dev, info.st_ino
 
 
 def remove_empty_folders(folders) -> None:

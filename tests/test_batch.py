@@ -1327,3 +1327,11 @@ def test_a_batch_says_which_frames_of_a_damaged_video_have_no_row(tmp_path, monk
     assert (f"lptrack: warning: cams/hit.mp4: {len(gap)} frames could not be decoded (the file is damaged there) and "
             f"have no row: {gap[0]}-{gap[-1]}; tracking went on after them") in result.stderr.splitlines()
     assert "ended after" not in result.stderr
+
+
+def test_a_failed_video_given_by_its_absolute_path_is_named_so(work):
+    # The line names the video as given: its absolute path below the current folder was made relative.
+    bad = work / "footage/day2/notes.mp4"
+    result = invoke(str(bad), "footage/day1/a.mp4", "--out-dir", "out", "--no-video", "--jobs", "1")
+    assert result.exit_code == 1
+    assert f"lptrack: failed: {bad}: cannot read '{bad}' as a video" in result.stderr, result.stderr

@@ -482,6 +482,45 @@ def test_rows_on_stdout_are_not_sent_twice_when_the_out_dir_goes(tiny_video, wor
     assert listing(workdir) == []
 
 
+def test_rows_into_a_pipe_are_not_sent_twice_when_the_out_dir_goes(tiny_video, workdir, monkeypatch):
+    # --csv /dev/stdout or a named pipe is written in place, as '-' is: its header and first row went out before the
+    # first frame's video opened in --out-dir; started again, they were sent twice.
+    from logpolar_track import video as video_module
+
+    real_open = video_module.VideoWriter._open
+    opens = []
+
+    def open_once_gone(self, width, height):
+        opens.append(1)
+        if len(opens) == 1:
+            self.wanted_path.parent.rmdir()  # a parallel run into it that failed
+        return real_open(self, width, height)
+
+    monkeypatch.setattr(video_module.VideoWriter, "_open", open_once_gone)
+    pipe = workdir / "rows"
+    os.mkfifo(pipe)
+    read, stop = [], threading.Event()
+
+    def reader():
+        while not stop.is_set():
+            with open(pipe) as rows:
+                read.append(rows.read())
+
+    thread = threading.Thread(target=reader, daemon=True)
+    thread.start()
+    result = invoke(tiny_video.path, "--out-dir", "out", "--csv", str(pipe))
+    stop.set()
+    while thread.is_alive():  # unblock the reader's open
+        try:
+            os.close(os.open(pipe, os.O_WRONLY | os.O_NONBLOCK))
+        except OSError:
+            pass
+        thread.join(0.05)
+    assert "".join(read).count("frame,time_s") == 1, read
+    assert result.exit_code == 1 and len(opens) == 1
+    assert result.stderr.endswith("folder 'out' does not exist (removed after the run started)\n"), result.stderr
+
+
 def test_no_roi_and_no_sidecar(tiny_video, workdir):
     tiny_video.path.with_suffix(".roi").unlink()
     result = invoke(tiny_video.path)

@@ -121,3 +121,43 @@ def test_a_failure_with_its_folders_in_place_is_not_started_again(tmp_path):
     with pytest.raises(OutputError):
         run_in_output_folders([folder], removed_each_time, retry=False, remove_made=False)
     assert starts == [1]
+
+
+def test_a_folder_made_again_by_a_third_run_before_the_failure_is_seen_is_started_again(tmp_path):
+    # Run A failed and removed the folder; run C, starting, made it again before this run looked at its failure.
+    folder = tmp_path / "out"
+    starts = []
+
+    def work():
+        starts.append(1)
+        if len(starts) == 1:
+            folder.rmdir()
+            keep = tmp_path / "keep"  # holds the inode just freed, as a busy file system's other files do
+            keep.mkdir()
+            try:
+                check_output_path(folder / "a.csv", what="output CSV")
+            finally:
+                folder.mkdir()  # run C
+                keep.rmdir()
+        return "done"
+
+    assert run_in_output_folders([folder], work, remove_made=False) == "done" and starts == [1, 1]
+
+
+def test_a_folder_made_again_for_a_start_that_then_fails_is_removed(tmp_path):
+    # A batch's video (remove_made=False: the batch removes the folders it made) whose folder, found in place, a
+    # run that failed removed; made again here and the start made again failing, it was left behind, empty.
+    folder = tmp_path / "out"
+    folder.mkdir()
+    starts = []
+
+    def work():
+        starts.append(1)
+        if len(starts) == 1:
+            folder.rmdir()
+            check_output_path(folder / "a.csv", what="output CSV")
+        raise OutputError("cannot write output CSV: No space left on device")
+
+    with pytest.raises(OutputError, match="No space left"):
+        run_in_output_folders([folder], work, remove_made=False)
+    assert starts == [1, 1] and list(tmp_path.iterdir()) == []

@@ -27,7 +27,7 @@ from ..pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, check
 from ..results import COLUMNS, FORMATS, stdout_errors
 from ..trackers import tracker_class, tracker_names
 from ..trackers.base import check_available, did_you_mean
-from ..outputs import make_output_folder, remove_empty_folders, run_in_output_folders
+from ..outputs import make_output_folder, remove_empty_folders, run_in_output_folders, writes_in_place
 from ..video import (IMAGE_EXTENSIONS, VideoReader, check_fps, guess_image_sequence, input_label, is_image_sequence,
                      read_frame)
 from . import (EXIT_FAILURE, PARAM_HELP, FrameRate, OneLineErrors, PathParam, TimeParam, WholeNumber,
@@ -415,7 +415,9 @@ def _run_one(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, 
                               start_time=start_time, max_frames=max_frames, fps=fps, video_out=video_out,
                               csv_out=csv_out, out_dir=out_dir, name=name, data_format=data_format, no_video=no_video,
                               overwrite=overwrite, skip_existing=skip_existing, quiet=quiet),
-        retry=csv_out != "-")
+        # Rows sent to stdout, or written in place (/dev/stdout, a named pipe) before the first frame's video opens,
+        # would be sent again.
+        retry=csv_out is None or not (csv_out == "-" or writes_in_place(Path(csv_out))))
 
 
 def _run_one_into(video: Path, roi, *, tracker: str, tuning: dict, start_frame: int, start_time: float | None,

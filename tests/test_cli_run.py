@@ -836,6 +836,9 @@ def test_a_video_whose_name_starts_with_a_dash_is_told_how_to_name_it(tiny_video
     result = invoke("--roi", "80,60,20", "--no-video", "--", "-clip.mp4")
     assert result.exit_code == 0 and listing(workdir) == ["-clip.lptrack.csv", "-clip.mp4"]
     assert "for the file" not in invoke("-x", tiny_video.path).stderr  # an option mistyped, no such file
+    # another option mistyped, the file an option's value: no hint about it
+    shutil.copy(tiny_video.path, workdir / "-old.csv")
+    assert "for the file" not in invoke(tiny_video.path, "--csv", "-old.csv", "--bogus").stderr
 
 
 def test_cli_keeps_opencv_warnings_off_stderr():

@@ -673,9 +673,9 @@ class VideoReader:
         container's rate (or a varying rate's last interval): all of it where every interval so far was the
         container's (a steady rate), up to a frame per failure where the rate has varied. Without failures a gap
         is a varying rate, not damage (a phone that skipped frames: they are not in the file), and the number goes
-        up by one; so are frames dropped without a failure (MPEG-TS damage: none is reported). After damage at a
-        steady rate, though, every gap is lost frames, and a picture stamped half a frame or more before the last
-        one's (a lost frame's, out of order) is left out.
+        up by one; so are frames dropped without a failure (MPEG-TS damage: none is reported). At a steady rate,
+        though, every gap within :data:`_DAMAGE_REACH` pictures of a failure is lost frames, and a picture stamped
+        inside such a gap, half a frame or more before the last one's (a lost frame's, out of order), is left out.
         Without stamps (a container reporting no frame rate) each failure counts as a frame. Failures that no gap
         follows (a file cut short in a packet, the frames held still coming out) lost no frame before the end.
 

@@ -156,12 +156,13 @@ def run_in_output_folders(folders, work: Callable[[], _Result], *, retry: bool =
     Parallel runs into one folder (``xargs -P``, several ``lptrack run`` at once) each make it if it is missing,
     and one that fails removes the folder it made if it is empty. If that lands after this process made or found
     the folder and before it opened its outputs there (an output's temporary file, once open, keeps the folder from
-    being removed), ``work`` raises :class:`OutputError` with a folder gone: the folders are made again and
-    ``work`` is started again (``_FOLDER_ATTEMPTS`` times in all). Nothing is written by then if every output goes
-    into ``folders`` (they are opened before the first frame is written); rows sent to a stream before the video's
-    first frame (``--csv -``) would be sent again: give ``retry=False`` there. With ``remove_made``, the folders
-    made here are removed again if ``work`` leaves them empty (it failed, or wrote nothing there); else whoever
-    runs several works into them does that once they are all done.
+    being removed), ``work`` raises :class:`OutputError` with a folder gone, or made again by a third run: the
+    folders are made again and ``work`` is started again (``_FOLDER_ATTEMPTS`` times in all). Nothing is written
+    by then if every output goes into ``folders`` (they are opened before the first frame is written); rows sent
+    to a stream or a file written in place before the video's first frame (``--csv -``, ``/dev/stdout``) would be
+    sent again: give ``retry=False`` there. With ``remove_made``, the folders made here are removed again if
+    ``work`` leaves them empty (it failed, or wrote nothing there); else whoever runs several works into them does
+    that once they are all done, and only those made for a start made again that failed are removed here.
     """
     folders = [Path(folder) for folder in folders]
     attempts = _FOLDER_ATTEMPTS if retry else 1

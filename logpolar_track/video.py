@@ -691,11 +691,11 @@ class VideoReader:
             self._damaged = self._damaged or failed > 0
             self._since_failure = 0 if failed else self._since_failure + 1
             previous = self._previous_stamp
-            # After damage at a steady rate, a picture stamped half a frame or more before the last one is a
-            # frame already passed, come out of order (H.264 with B-frames: frame 8's after frames 16 and 17, when
-            # 9-15 were lost); numbered on, it put every later frame one number late. It is left out.
-            # Only a picture stamped inside a gap numbered as lost frames: stamps that jump back elsewhere (MPEG-TS
-            # files joined with cat, a stamp wrap) start again, and every later picture would be left out.
+            # After damage at a steady rate, a picture stamped half a frame or more before the last one, inside a
+            # gap numbered as lost frames, is a frame already passed, come out of order (H.264 with B-frames: frame
+            # 8's after frames 16 and 17, when 9-15 were lost); numbered on, it put every later frame one number
+            # late. It is left out. Not stamps that jump back elsewhere (MPEG-TS files joined with cat, a stamp
+            # wrap): they start again, and every later picture would be left out.
             if not (self._damaged and self._steady and stamp is not None and previous is not None
                     and stamp < previous - 0.5 / self._stream_fps
                     and any(lo < stamp < hi for lo, hi in self._lost_spans)):
@@ -718,9 +718,9 @@ class VideoReader:
         if (self._unplaced or steady_damage) and frames_apart > 1:
             # At most a frame per failure where the rate has varied: its pause within the decoder's delay after a
             # failure is not lost frames, and failures left over go to the next gap. At a steady rate, and before
-            # the first frame, all of the gap, and after damage every gap: one failure can take a whole group of
-            # pictures with it (H.264 without B-frames, 20 kB of a file damaged: 8 frames lost, one failure
-            # reported), and the frames it took can come out in more than one gap.
+            # the first frame, all of the gap, and every gap within the damage's reach: one failure can take a whole
+            # group of pictures with it (H.264 without B-frames, 20 kB of a file damaged: 8 frames lost, one
+            # failure reported), and the frames it took can come out in more than one gap.
             lost = frames_apart - 1 if previous is None or steady_damage else min(frames_apart - 1, self._unplaced)
             number, self._unplaced = number + lost, max(self._unplaced - lost, 0)
             if previous is not None:

@@ -1119,8 +1119,8 @@ class ScriptedCapture:
 
     def get(self, prop):
         return {cv2.CAP_PROP_FPS: 25.0, cv2.CAP_PROP_FRAME_COUNT: float(self.frame_count),
-                cv2.CAP_PROP_POS_MSEC: (self.stamp or 0) * 40.0, cv2.CAP_PROP_FOURCC: float(cv2.VideoWriter_fourcc(*"avc1"))
-                }.get(prop, 0.0)
+                cv2.CAP_PROP_POS_MSEC: (self.stamp or 0) * 40.0,
+                cv2.CAP_PROP_FOURCC: float(cv2.VideoWriter_fourcc(*"avc1"))}.get(prop, 0.0)
 
     def release(self):
         pass

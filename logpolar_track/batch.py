@@ -974,9 +974,9 @@ def run_batch(plan: BatchPlan, *, jobs: int = 1, scheduler=None, stream: IO[str]
 def _settle(job: VideoJob, result: TaskOutcome) -> VideoOutcome:
     if result.ok:
         return result.value
-    # The job's paths are absolute (a worker's current folder may differ); the line names the video as given and
-    # the outputs below the current folder as a single run does.
-    # Below the current folder first, then the video as given: a video given by its absolute path stays so.
+    # The job's paths are absolute (a worker's current folder may differ); the line names the outputs below the
+    # current folder relatively and the video as given, as a single run does (in that order: a video given by its
+    # absolute path stays so).
     error, video = result.error, str(job.video)
     here = Path.cwd()
     if here != Path(here.anchor):

@@ -183,10 +183,9 @@ class OneLineErrors(click.Command):
             message = exc.format_message()
             if isinstance(exc, click.NoSuchOption):
                 # `lptrack run -clip.mp4`: a file whose name starts with '-' reads as options ("No such option
-                # '-c'"); as for ls or rm, it is named ./-clip.mp4 or after --.
-                # Only the argument the unknown option was read from (not another option's value, '--csv -old.csv').
-                named = next((arg for arg in given if arg.startswith("-") and arg != "-"
-                              and arg.startswith(exc.option_name) and os.path.exists(arg)), None)
+                # '-c'"); as for ls or rm, it is named ./-clip.mp4 or after --. The argument the unknown option was
+                # read from, not another option's value ('--csv -old.csv').
+                named = next((arg for arg in given if arg.startswith(exc.option_name) and os.path.exists(arg)), None)
                 if named is not None:
                     message = message.rstrip(".") + f"; for the file '{named}' give ./{named} or -- {named}"
             raise UsageError(f"{message} (see 'lptrack {self.name} --help')") from None

@@ -163,7 +163,7 @@ class SimilarityTracker(Tracker):
             raise NotStartedError("update() called before init(); start the tracker on a frame and a ROI first")
         frame = np.asarray(frame)
         check_frame(frame, self.frame_size, self.frame_layout)
-        estimate = self._estimate(self._prepared(frame), self.last)
+        estimate = self._onto_frame(self._estimate(self._prepared(frame), self.last))
         # An estimate whose centre left the frame is lost whatever it scored: the search there matched the frame's
         # replicated border (``spatial`` followed an object out of view, tracked at 0.7, 90 px beyond the edge).
         ok = (estimate is not None and estimate.score >= self.lost_threshold and _finite(estimate)
@@ -174,6 +174,29 @@ class SimilarityTracker(Tracker):
             return True, self._state(estimate)
         score = 0.0 if estimate is None or not math.isfinite(estimate.score) else estimate.score
         return False, self._state(self.last, score=score)
+
+    def _onto_frame(self, estimate: Similarity | None) -> Similarity | None:
+        """``estimate`` with a centre less than half a pixel beyond the outermost pixel centres moved onto them.
+
+        A ROI may be centred on the outermost pixel centre (:func:`~logpolar_track.geometry.check_roi_fits`); an
+        object resting there is estimated a few hundredths of a pixel either side of it, and those beyond were
+        reported lost (a still object at ``cx`` = width - 1 lost on every frame, at scores of 0.95). Within its
+        outermost pixel is still in the frame; farther out is left to :meth:`_inside`."""
+        if estimate is None or not _finite(estimate):
+            return estimate
+        width, height = self.frame_size
+        cx, cy = estimate.cx, estimate.cy
+        if -0.5 <= cx < 0.0:
+            cx = 0.0
+        elif width - 1 < cx <= width - 0.5:
+            cx = float(width - 1)
+        if -0.5 <= cy < 0.0:
+            cy = 0.0
+        elif height - 1 < cy <= height - 0.5:
+            cy = float(height - 1)
+        if cx == estimate.cx and cy == estimate.cy:
+            return estimate
+        return Similarity(cx, cy, estimate.scale, estimate.rotation_deg, estimate.score)
 
     def _inside(self, estimate: Similarity) -> bool:
         """Whether the estimate's centre is within the frame (its outermost pixel centres)."""

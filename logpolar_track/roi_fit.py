@@ -75,7 +75,15 @@ def roi_from_box(box, *, round_tolerance: float = ROUND_TOLERANCE) -> Ellipse:
         Not 4 numbers (read as :func:`~logpolar_track.geometry.parse_numbers` reads them: plain decimals, no ``_``,
         ``nan`` or ``inf``), or a side <= 0.
     """
-    values = _listed(box, "box", BOX_SYNTAX) if isinstance(box, str) else [float(v) for v in box]
+    if isinstance(box, str):
+        values = _listed(box, "box", BOX_SYNTAX)
+    else:
+        try:
+            values = [float(v) for v in np.asarray(box, float).ravel()]  # 4 numbers, or one row of them (1, 4)
+        except (TypeError, ValueError):
+            raise RoiError(f"a box is 4 numbers x, y, w, h (pixels); got {box!r:.60}") from None
+        if not all(math.isfinite(v) for v in values):
+            raise RoiError(f"box {box!r:.80}: a number is not finite")
     if len(values) != 4:
         raise RoiError(f"box '{box}' has {counted(len(values), 'number')}; expected {BOX_SYNTAX}")
     x, y, w, h = values

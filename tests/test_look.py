@@ -278,6 +278,19 @@ def test_roi_from_box_reads_a_benchmark_line_separated_by_tabs_or_spaces():
         roi_from_box("60,40 80,40")  # commas and spaces mixed: not guessed
 
 
+def test_roi_from_box_takes_an_array_row_as_roi_from_quad_does():
+    """A box as numpy gives it, one row of a ground-truth file read with np.loadtxt (shape (1, 4)), is the box; it
+    raised TypeError ('only 0-dimensional arrays can be converted'), and a field that is not a number ValueError,
+    where roi_from_quad takes (1, 8) or (4, 2) corners and refuses others with a RoiError."""
+    e = roi_from_box(np.array([[60, 40, 80, 40]]))
+    assert (e.cx, e.cy, e.a, e.b, e.angle_deg) == (100, 60, 40, 20, 0)
+    for bad in (np.zeros((2, 4)), [1, 2, 3, "x"], None):
+        with pytest.raises(RoiError):
+            roi_from_box(bad)
+    with pytest.raises(RoiError, match="not finite"):
+        roi_from_box((10, 20, 30, float("nan")))
+
+
 @pytest.mark.parametrize("angle", [0.0, 25.0, -40.0, 90.0, 120.0])
 def test_roi_from_quad_is_the_ellipse_in_a_rotated_box(angle):
     cx, cy, w, h = 150.0, 90.0, 80.0, 30.0

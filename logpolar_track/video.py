@@ -231,6 +231,11 @@ def _open_capture(path: Path) -> cv2.VideoCapture:
     mirrors the picture."""
     if is_image_sequence(path):
         return _ImageSequenceCapture(_numbered_images(path))
+    if path.suffix.lower() in IMAGE_EXTENSIONS and path.is_file():
+        # A still image is read as an image sequence's images are (cv2.imread, which turns a photo upright by its
+        # EXIF orientation): FFmpeg ignores the orientation, so 'lptrack roi img/0001.jpg' checked a ROI against
+        # the picture on its side that 'lptrack run img/%04d.jpg' then tracked upright.
+        return _ImageSequenceCapture([(0, path)])
     capture = cv2.VideoCapture(opencv_path(path, "video"))
     shown = _MIRRORS.get(display_matrix(path)) if capture.isOpened() else None
     # OpenCV turns frames by the matrix's angle alone, which takes a mirror for a half turn: its own turning is

@@ -1149,3 +1149,28 @@ def test_a_pause_long_after_damage_is_not_lost_frames(monkeypatch, tmp_path):
     script = [*range(10), None, *range(11, 60), *range(70, 80)]
     items = scripted_read(monkeypatch, tmp_path, script, 69)
     assert [i for i, _ in items] == [*range(10), *range(11, 70)]
+
+
+def _jpeg_turned_by_exif(path, image, orientation=6):
+    """``image`` as a JPEG whose EXIF says to show it turned (6: a quarter turn clockwise), as a phone writes one."""
+    ok, data = cv2.imencode(".jpg", image)
+    assert ok
+    tiff = (b"MM\x00\x2a\x00\x00\x00\x08" + b"\x00\x01" + b"\x01\x12\x00\x03\x00\x00\x00\x01"
+            + orientation.to_bytes(2, "big") + b"\x00\x00" + b"\x00\x00\x00\x00")
+    app1 = b"Exif\x00\x00" + tiff
+    data = data.tobytes()
+    path.write_bytes(data[:2] + b"\xff\xe1" + (len(app1) + 2).to_bytes(2, "big") + app1 + data[2:])
+
+
+def test_a_still_image_is_read_as_its_image_sequence_reads_it(tmp_path):
+    """A photo whose EXIF turns it: read alone (FFmpeg, which ignores the orientation) it was 200x100, in an image
+    sequence (cv2.imread) 100x200, so 'lptrack roi img/0001.jpg' checked and gave a ROI in a picture on its side
+    that 'lptrack run img/%04d.jpg' then refused or tracked elsewhere."""
+    image = np.zeros((100, 200, 3), np.uint8)
+    image[10:30, 150:190] = 255
+    for k in (1, 2):
+        _jpeg_turned_by_exif(tmp_path / f"{k:04d}.jpg", image)
+    alone = video_module.read_frame(tmp_path / "0001.jpg")
+    in_sequence = video_module.read_frame(tmp_path / "%04d.jpg")
+    assert alone.image.shape == in_sequence.image.shape
+    assert np.array_equal(alone.image, in_sequence.image)

@@ -188,10 +188,11 @@ def _invalid_message(e: Ellipse) -> str:
 
 def _fmt(value: float) -> str:
     """A number for messages: up to 3 decimals, trailing zeros dropped; huge ones in exponent form (1e+308, not
-    309 digits)."""
+    309 digits); one that rounds to zero is 0, never -0 (an angle of -0.0001 made a ROI spec '...,-0')."""
     if abs(value) >= 1e15:
         return f"{value:.6g}"
-    return f"{value:.3f}".rstrip("0").rstrip(".")
+    text = f"{value:.3f}".rstrip("0").rstrip(".")
+    return "0" if text == "-0" else text
 
 
 #: A number as lptrack reads one from text: a sign, digits with a decimal point or not, an exponent (``12``,

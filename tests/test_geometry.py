@@ -83,6 +83,12 @@ def test_to_spec_round_trips():
         assert parse_roi(roi.to_spec()) == roi
 
 
+def test_to_spec_never_writes_minus_zero():
+    # 'lptrack frame' named its PNG ...roi_300_200_80_30_-0.png, and 'lptrack roi' could print the same.
+    assert parse_roi("300,200,80,30,-0.0001").to_spec() == "300,200,80,30,0"
+    assert Ellipse(-0.0002, 5, 3, 2, -0.0004).to_spec() == "0,5,3,2,0"
+
+
 def test_check_roi_fits_accepts_roi_partly_over_border():
     check_roi_fits(Ellipse.circle(10, 50, 15), 100, 100)  # about 70 % inside
 

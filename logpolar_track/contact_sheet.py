@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from .draw import LABEL_FONT, LOST_COLOUR, TRACKED_COLOUR, draw_state, put_label, signed
-from .errors import UsageError
+from .errors import UsageError, counted
 from .evaluate import as_run_table
 from .outputs import check_image_suffix, check_output_path, write_png
 from .results import FrameResult
@@ -93,6 +93,13 @@ def write_contact_sheet(video_path, run_csv_or_rows, out_png, *, cols: int = 4, 
     tiles: dict[int, np.ndarray] = {}
     with VideoReader(video_path) as reader:
         geometry = sheet_geometry(reader.width, reader.height, cols, len(wanted), width)
+        sheet_w, sheet_h = geometry["size"]
+        if sheet_w * sheet_h > MAX_SHEET_PIXELS:
+            # Refused before decoding: the tiles and the sheet are held in memory (--count 4096 --cols 1 on a 4K
+            # run asked for 6 gigapixels, 18 GB each).
+            raise UsageError(f"a sheet of {len(wanted)} frames in {counted(cols, 'column')} would be "
+                             f"{sheet_w}x{sheet_h} px, over {MAX_SHEET_PIXELS / 1e6:g} megapixels; give more columns "
+                             f"(--cols) or fewer frames (--count, --rows)")
         tile_w, tile_h = geometry["tile"]
         last = max(by_frame)
         for index, _, frame in reader:
@@ -115,6 +122,10 @@ def write_contact_sheet(video_path, run_csv_or_rows, out_png, *, cols: int = 4, 
         y, x = geometry["header_h"] + r * cell_h, c * tile_w
         sheet[y:y + cell_h, x:x + tile_w] = tiles[i]
     return write_png(out_png, sheet, overwrite=overwrite, what="contact sheet")
+
+
+#: The largest contact sheet made, in pixels (300 MB of BGR, as many again for its tiles).
+MAX_SHEET_PIXELS = 100_000_000
 
 
 def sheet_geometry(video_w: int, video_h: int, cols: int, n_frames: int, width: int = 1600) -> dict:

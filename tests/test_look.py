@@ -24,6 +24,7 @@ import pytest
 from conftest import CliRunner, decode_all
 
 from logpolar_track.cli import main
+from logpolar_track import contact_sheet
 from logpolar_track.contact_sheet import sheet_geometry, write_contact_sheet
 from logpolar_track.draw import GRID_COLOUR, draw_grid
 from logpolar_track.errors import RoiError, UsageError
@@ -915,6 +916,19 @@ def test_sheet_of_fewer_frames_than_columns_has_no_empty_columns(tiny_run, tmp_p
     out = tmp_path / "sheet.png"
     assert invoke("sheet", video.path, run_csv, "-o", out, "--count", 2, "--cols", 4, "--width", 400).exit_code == 0
     assert png_size(out) == (2 * 160, 28 + 120 + 18)  # 2 tiles of the video's own size, not 4 of 100 px
+
+
+def test_a_sheet_too_large_to_hold_is_refused_before_decoding(tiny_run, tmp_path, monkeypatch):
+    """--count 4096 --cols 1 on a 4K run asked for 6 gigapixels, tiles and sheet held in memory; refused at
+    MAX_SHEET_PIXELS (here lowered to 100,000 for the 160x120 video)."""
+    monkeypatch.setattr(contact_sheet, "MAX_SHEET_PIXELS", 100_000)
+    video, run_csv, _ = tiny_run
+    out = tmp_path / "sheet.png"
+    line = one_error_line(invoke("sheet", video.path, run_csv, "-o", out, "--count", 20, "--cols", 1), 2)
+    assert line == ("lptrack: error: a sheet of 20 frames in 1 column would be 160x2788 px, over 0.1 megapixels; give "
+                    "more columns (--cols) or fewer frames (--count, --rows)")
+    assert not out.exists()
+    assert invoke("sheet", video.path, run_csv, "-o", out, "--count", 2, "--cols", 2).exit_code == 0  # 320x166
 
 
 def test_write_contact_sheet_accepts_results(tiny_run, tmp_path):

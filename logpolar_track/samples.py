@@ -35,6 +35,7 @@ import numpy as np
 from .errors import LptrackError, OutputError, UsageError
 from .evaluate import GT_CSV_COLUMNS
 from .outputs import written_into_place
+from .results import _number
 from .geometry import Ellipse, wrap_degrees
 from .synthetic import Pose, random_texture
 
@@ -817,7 +818,8 @@ def build_scene(name: str, sources: Sources, seed: int = DEFAULT_SEED) -> Scene:
 def gt_line(row: tuple) -> str:
     """One ``.gt.csv`` line (no newline): pixels and degrees to 3 decimals, scale to 5."""
     k, cx, cy, a, b, angle, scale, rot = row
-    return f"{k},{cx:.3f},{cy:.3f},{a:.3f},{b:.3f},{angle:.3f},{scale:.5f},{rot:.3f}"
+    # The run CSV's number format (never '-0.000': ellipse's frame 0 wrote a rotation of -0.000).
+    return ",".join([str(int(k))] + [_number(v, 3) for v in (cx, cy, a, b, angle)] + [_number(scale, 5), _number(rot, 3)])
 
 
 def sample_paths(out_dir: str | os.PathLike, name: str) -> tuple[Path, Path, Path]:

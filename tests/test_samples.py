@@ -317,3 +317,11 @@ def test_committed_gt_matches_the_generator(name):
     assert len(lines) - 1 == scene.n_frames
     for k in (0, 1, scene.n_frames // 2, scene.n_frames - 1):
         assert lines[k + 1] == S.gt_line(scene.ground_truth(k))
+
+
+def test_gt_line_never_writes_minus_zero():
+    """A value that rounds to zero is written 0.000, as in the run CSV (ellipse.gt.csv's frame 0 had -0.000)."""
+    line = S.gt_line((0, 330.0, 240.0, 95.0, 50.0, -0.0001, 1.0, -0.0))
+    assert line == "0,330.000,240.000,95.000,50.000,0.000,1.00000,0.000"
+    scene = S.build_scene("ellipse", S.SyntheticSources())
+    assert "-0.000" not in S.gt_line(scene.ground_truth(0))

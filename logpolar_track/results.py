@@ -102,7 +102,7 @@ class FrameResult:
         return self.status == "lost"
 
 
-def _number(value: float | None, decimals: int) -> str:
+def fixed_decimals(value: float | None, decimals: int) -> str:
     """``value`` with fixed ``decimals``; empty for None/NaN/inf; never ``-0.000``."""
     if value is None or not math.isfinite(value):
         return ""
@@ -129,9 +129,10 @@ def format_row(result: FrameResult, *, initial_angle_deg: float | None = None) -
     if state.rotation_deg is None and initial_angle_deg is not None:
         angle = initial_angle_deg
     angle = wrap_degrees(round(angle, 3))  # round first so 180.0004 and -179.9996 both print as 180.000
-    return [str(int(result.frame)), _number(result.time_s, 6),
-            _number(e.cx, 3), _number(e.cy, 3), _number(e.a, 3), _number(e.b, 3), _number(angle, 3),
-            _number(state.scale, 5), _number(state.rotation_deg, 3), _number(state.score, 4), result.status]
+    return [str(int(result.frame)), fixed_decimals(result.time_s, 6),
+            *(fixed_decimals(value, 3) for value in (e.cx, e.cy, e.a, e.b, angle)),
+            fixed_decimals(state.scale, 5), fixed_decimals(state.rotation_deg, 3), fixed_decimals(state.score, 4),
+            result.status]
 
 
 def header_line(*, video: bool = False) -> str:

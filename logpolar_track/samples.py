@@ -35,7 +35,7 @@ import numpy as np
 from .errors import LptrackError, OutputError, UsageError
 from .evaluate import GT_CSV_COLUMNS
 from .outputs import written_into_place
-from .results import _number
+from .results import fixed_decimals
 from .geometry import Ellipse, wrap_degrees
 from .synthetic import Pose, random_texture
 
@@ -819,7 +819,8 @@ def gt_line(row: tuple) -> str:
     """One ``.gt.csv`` line (no newline): pixels and degrees to 3 decimals, scale to 5."""
     k, cx, cy, a, b, angle, scale, rot = row
     # The run CSV's number format (never '-0.000': ellipse's frame 0 wrote a rotation of -0.000).
-    return ",".join([str(int(k))] + [_number(v, 3) for v in (cx, cy, a, b, angle)] + [_number(scale, 5), _number(rot, 3)])
+    fields = [fixed_decimals(v, 3) for v in (cx, cy, a, b, angle)] + [fixed_decimals(scale, 5), fixed_decimals(rot, 3)]
+    return ",".join([str(int(k)), *fields])
 
 
 def sample_paths(out_dir: str | os.PathLike, name: str) -> tuple[Path, Path, Path]:

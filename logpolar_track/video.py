@@ -476,6 +476,12 @@ def frames_to_track(frame_count: int, start_frame: int, max_frames: int | None) 
 _DAMAGE_REACH = 32
 
 
+def _at_rate(interval: float, nominal: float) -> bool:
+    """Whether ``interval`` between two frames (seconds) is a frame of ``nominal`` seconds: within 10 % and 1.5 ms
+    of it, as a constant rate's stamps rounded to milliseconds (MKV) are."""
+    return abs(interval - nominal) <= max(0.1 * nominal, 0.0015)
+
+
 class VideoReader:
     """Frames of a video file as ``(index, time_s, frame)``, decoded ahead in a background thread.
 
@@ -562,8 +568,8 @@ class VideoReader:
         self._unplaced = 0  # failed grabs whose lost frames no gap in the stamps has shown yet
         self._interval: float | None = None  # seconds between the last two frames decoded in a row
         self._steady = True  # whether every interval between frames decoded in a row so far was the container's
-        self._damaged = False  # whether a grab has failed (a packet FFmpeg refused)
-        self._since_failure = 0  # pictures decoded since the last failed grab
+        # Pictures decoded since the last failed grab (a packet FFmpeg refused); None while none has failed.
+        self._since_failure: int | None = None
         self._lost_spans: list[tuple[float, float]] = []  # stamps either side of each gap numbered as lost frames
         self.timestamps_from: int | None = None
         self._last_time = -math.inf
@@ -693,15 +699,17 @@ class VideoReader:
                 if not (number + failed < self.frame_count and failed < MAX_UNDECODABLE_RUN):
                     return None
             stamp = self._frame_stamp()
-            self._damaged = self._damaged or failed > 0
-            self._since_failure = 0 if failed else self._since_failure + 1
+            if failed:
+                self._since_failure = 0
+            elif self._since_failure is not None:
+                self._since_failure += 1
             previous = self._previous_stamp
             # After damage at a steady rate, a picture stamped half a frame or more before the last one, inside a
             # gap numbered as lost frames, is a frame already passed, come out of order (H.264 with B-frames: frame
             # 8's after frames 16 and 17, when 9-15 were lost); numbered on, it put every later frame one number
             # late. It is left out. Not stamps that jump back elsewhere (MPEG-TS files joined with cat, a stamp
             # wrap): they start again, and every later picture would be left out.
-            if not (self._damaged and self._steady and stamp is not None and previous is not None
+            if not (self._steady and stamp is not None and previous is not None
                     and stamp < previous - 0.5 / self._stream_fps
                     and any(lo < stamp < hi for lo, hi in self._lost_spans)):
                 break
@@ -714,12 +722,12 @@ class VideoReader:
         # MKV, stay within 10 % and 1.5 ms of it); a varying one reports its average, 18.75 fps for 25 with a pause,
         # and the interval between its last two frames counts frames better (3 lost at 25 fps, not 2).
         lasts = nominal = 1.0 / self._stream_fps
-        if self._interval is not None and abs(self._interval - nominal) > max(0.1 * nominal, 0.0015):
+        if self._interval is not None and not _at_rate(self._interval, nominal):
             lasts = self._interval
         frames_apart = round((stamp - (-lasts if previous is None else previous)) / lasts)  # frame 0 is at 0
         # Damage reaches as far as the decoder's delay: a gap long after the last failure is a pause (a phone's, in a
         # file whose average rate stays within 10 % of its frames' own), not lost frames.
-        steady_damage = self._damaged and self._steady and self._since_failure <= _DAMAGE_REACH
+        steady_damage = self._steady and self._since_failure is not None and self._since_failure <= _DAMAGE_REACH
         if (self._unplaced or steady_damage) and frames_apart > 1:
             # At most a frame per failure where the rate has varied: its pause within the decoder's delay after a
             # failure is not lost frames, and failures left over go to the next gap. At a steady rate, and before
@@ -732,7 +740,7 @@ class VideoReader:
                 self._lost_spans = [*self._lost_spans[-7:], (previous, stamp)]
         elif previous is not None and stamp > previous:
             self._interval = stamp - previous
-            self._steady = self._steady and abs(self._interval - nominal) <= max(0.1 * nominal, 0.0015)
+            self._steady = self._steady and _at_rate(self._interval, nominal)
         return number
 
     def _frame_stamp(self) -> float | None:

@@ -185,15 +185,7 @@ class SimilarityTracker(Tracker):
         if estimate is None or not _finite(estimate):
             return estimate
         width, height = self.frame_size
-        cx, cy = estimate.cx, estimate.cy
-        if -0.5 <= cx < 0.0:
-            cx = 0.0
-        elif width - 1 < cx <= width - 0.5:
-            cx = float(width - 1)
-        if -0.5 <= cy < 0.0:
-            cy = 0.0
-        elif height - 1 < cy <= height - 0.5:
-            cy = float(height - 1)
+        cx, cy = _onto_pixels(estimate.cx, width), _onto_pixels(estimate.cy, height)
         if cx == estimate.cx and cy == estimate.cy:
             return estimate
         return Similarity(cx, cy, estimate.scale, estimate.rotation_deg, estimate.score)
@@ -314,6 +306,16 @@ def tracker_class(name: str):
         names = tracker_names(include_unavailable=True)
         raise UsageError(f"unknown tracker '{name}'{did_you_mean(name, names)}; choose one of: "
                          f"{', '.join(names)}") from None
+
+
+def _onto_pixels(value: float, size: int) -> float:
+    """A coordinate within half a pixel beyond the outermost pixel centres (0 and ``size - 1``) moved onto them;
+    any other as it is."""
+    if -0.5 <= value < 0.0:
+        return 0.0
+    if size - 1 < value <= size - 0.5:
+        return float(size - 1)
+    return value
 
 
 def did_you_mean(name: str, choices: Iterable[str]) -> str:

@@ -32,9 +32,9 @@ from typing import IO, Callable, Iterable, Mapping, Sequence
 from .errors import LptrackError, RoiError, UsageError, VideoError
 from .executor import TaskOutcome, run_tasks
 from .geometry import NUMBER_RULE, ROI_SYNTAX, Ellipse, parse_number, parse_roi
-from .pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, RunSummary, mirrored_path,
-                       read_roi_sidecar, read_roi_text, run_video)
-from .results import FORMATS, decode_text, header_line
+from .pipeline import (CSV_OUT_SUFFIX, DEFAULT_TRACKER, VIDEO_OUT_SUFFIX, RunSummary, decode_roi_text,
+                       mirrored_path, read_roi_sidecar, read_roi_text, run_video)
+from .results import FORMATS, header_line
 from .trackers import tracker_class
 from .outputs import remove_empty_folders, run_in_output_folders, temporary_path
 from .video import (CODECS_BY_EXTENSION, VIDEO_EXTENSIONS, VideoReader, announced_frame_count, check_fps,
@@ -329,12 +329,7 @@ def _roi_listing(stream) -> str:
     raw = getattr(stream, "buffer", None)
     if raw is None:
         return stream.read()
-    data = raw.read()
-    try:
-        return decode_text(data)
-    except UnicodeDecodeError:
-        raise LptrackError("cannot read the ROI file from standard input: it is not text in UTF-8 (nor UTF-16 with a "
-                           "byte-order mark)") from None
+    return decode_roi_text(raw.read(), "the ROI file from standard input")
 
 
 #: How much of standard input is looked at, and the share of it (and a count) that may be bytes no list of paths

@@ -159,11 +159,22 @@ def read_roi_text(path) -> str:
         data = path.read_bytes()
     except OSError as exc:
         raise LptrackError(f"cannot read ROI file '{path}': {exc.strerror or exc}") from None
+    return decode_roi_text(data, f"ROI file '{path}'")
+
+
+def decode_roi_text(data: bytes, source: str) -> str:
+    """``data`` of a ROI file as :func:`read_roi_text` reads it; ``source`` names it in the message.
+
+    Raises
+    ------
+    LptrackError
+        It is not such text (exit code 1).
+    """
     try:
         return decode_text(data)
     except UnicodeDecodeError:
-        raise LptrackError(f"cannot read ROI file '{path}': it is not text in UTF-8 (nor UTF-16 with a byte-order "
-                           f"mark); save it as UTF-8") from None
+        raise LptrackError(f"cannot read {source}: it is not text in UTF-8 (nor UTF-16 with a byte-order mark); "
+                           f"save it as UTF-8") from None
 
 
 def read_roi_sidecar(video_path) -> Ellipse | None:

@@ -357,6 +357,10 @@ def test_roi_file_on_standard_input(work):
     assert both.exit_code == 2
     assert both.stderr == ("lptrack: error: '-' (standard input) can give the videos' paths or the ROI file, not "
                            "both: give the ROI file's path, or list the videos in it and leave VIDEO out\n")
+    binary = invoke("--roi-file", "-", "--no-video", "--csv", "-", stdin=b"\xc3\x28\x00\x01")
+    assert binary.exit_code == 1
+    assert binary.stderr == ("lptrack: error: cannot read the ROI file from standard input: it is not text in UTF-8 "
+                             "(nor UTF-16 with a byte-order mark); save it as UTF-8\n")
 
 
 def test_roi_file_relative_paths_start_frame_and_tracker(work):

@@ -1,9 +1,11 @@
-"""Sequences with ground truth: lptrack's sample videos and public benchmark folders (OTB, VOT, UAV123).
+"""Sequences with ground truth: lptrack's sample videos and public benchmark folders (OTB, VOT, UAV123, LaSOT,
+GOT-10k, TrackingNet).
 
 :func:`discover` finds every sequence under a folder; a :class:`Sequence` streams its frames (one decoded at a
 time) and carries its ground truth (:class:`~logpolar_track.evaluate.GroundTruth`) and initial ROI.
 
-Layouts recognised (file names case-sensitive as published):
+Layouts recognised (file names case-sensitive as published); boxes are x,y,w,h in pixels, the top-left corner
+then width and height, one line per frame:
 
 lptrack samples
     ``<name>.mp4`` (or ``.avi``, ``.mkv``, ``.mov``, ``.webm``) with ``<name>.gt.csv`` beside it; initial ROI
@@ -16,16 +18,32 @@ VOT
     quadrilateral per line, 0-based).
 UAV123
     ``img/`` + ``<folder name>.txt`` (x,y,w,h, 1-based).
+LaSOT
+    ``<class>/<class>-<n>/img/00000001.jpg ...`` + ``groundtruth.txt`` (x,y,w,h, 1-based) + ``full_occlusion.txt``
+    and ``out_of_view.txt`` (one comma-separated 0/1 flag per frame, on one line). A frame flagged in either is not
+    scored: the target is absent there and its box arbitrary (``1,1,-1,-1``, or the last box seen).
+GOT-10k (train and val splits)
+    ``GOT-10k_Val_000001/00000001.jpg ...`` + ``groundtruth.txt`` (x,y,w,h, 1-based) + ``absence.label`` (0/1 per
+    line) and, if present, ``cover.label`` (visible share in eighths, 0-8). A frame with absence 1 or cover 0 is
+    not scored. Frame rate :data:`GOT10K_FPS`. The test split's ``groundtruth.txt`` has the first frame's box only
+    (the rest is kept for the evaluation server): such a sequence cannot be scored and is skipped as unread.
+TrackingNet
+    a split folder (``TRAIN_0`` ... ``TRAIN_11``, ``TEST``) holding ``frames/<video>/0.jpg, 1.jpg ...`` and
+    ``anno/<video>.txt`` (x,y,w,h, 0-based); a ``frames/<video>`` folder alone is read with its ``anno`` file too.
+    The test split's files have one line (the first frame's box): skipped as unread, as GOT-10k's test split.
 
-Line ``k`` of a benchmark ground-truth file belongs to the ``k``-th frame image in natural sort order. Frames
-without a ground-truth line (more frames than lines), NaN lines and empty boxes are not scored. The tracker is
-started on the first frame that has ground truth, from the ellipse inscribed in that box (rotated rectangle
-for VOT polygons). Image sequences carry no frame rate; ``time_s`` assumes :data:`IMAGE_FPS`.
+Line ``k`` of a benchmark ground-truth file belongs to the ``k``-th frame image in natural sort order (``10.jpg``
+after ``9.jpg``). Frames without a ground-truth line (more frames than lines), NaN lines, empty boxes and frames a
+benchmark flags as absent are not scored. The tracker is started on the first frame that has ground truth, from
+the ellipse inscribed in that box (rotated rectangle for VOT polygons). 1-based boxes (Matlab's convention: the
+top-left pixel is (1, 1)) are moved by -1 pixel in x and y. Image sequences carry no frame rate; ``time_s``
+assumes :data:`IMAGE_FPS` (GOT-10k: :data:`GOT10K_FPS`).
 """
 
 from __future__ import annotations
 
 import math
+import os
 import re
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -39,8 +57,11 @@ from .geometry import Ellipse
 from .pipeline import read_roi_sidecar
 from .video import VIDEO_EXTENSIONS
 
-#: Frame rate assumed for image sequences (OTB and VOT are mostly 30 fps captures), frames per second.
+#: Frame rate assumed for image sequences (OTB, VOT, LaSOT and TrackingNet are mostly 30 fps captures), frames per
+#: second.
 IMAGE_FPS = 30.0
+#: GOT-10k's frame rate (its videos were cut and annotated at 10 frames per second), frames per second.
+GOT10K_FPS = 10.0
 IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff")
 #: How many folders below a dataset folder sequences are looked for (`discover`).
 SEARCH_DEPTH = 3
@@ -55,7 +76,7 @@ class Sequence:
     name : str
         Display name (folder name or video stem).
     kind : str
-        ``lptrack``, ``otb``, ``vot`` or ``uav123``.
+        ``lptrack``, ``otb``, ``vot``, ``uav123``, ``lasot``, ``got10k`` or ``trackingnet``.
     path : Path
         The sequence folder, or the video file.
     gt_path : Path
@@ -69,7 +90,7 @@ class Sequence:
     n_frames : int
         Number of frames (for videos: the container's count, which may be approximate; 0 if unknown).
     fps : float
-        Frames per second (:data:`IMAGE_FPS` for image sequences).
+        Frames per second (:data:`IMAGE_FPS` for image sequences, :data:`GOT10K_FPS` for GOT-10k's).
     frame_files : tuple of Path or None
         Frame images in order, for image sequences.
     played_backwards : bool
@@ -231,24 +252,42 @@ def _video_frames(path: Path):
 
 
 def _natural_key(path: Path):
-    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", path.name)]
+    return _natural_name_key(path.name)
+
+
+def _natural_name_key(name: str):
+    return [int(t) if t.isdigit() else t.lower() for t in _DIGITS.split(name)]
+
+
+_DIGITS = re.compile(r"(\d+)")
+_TRAILING_NUMBER = re.compile(r"(\d+)$")
 
 
 def _images_in(folder: Path) -> list[Path]:
     if not folder.is_dir():
         return []
-    # Hidden files (macOS's ._0001.jpg beside 0001.jpg, copied from its disks) are not frames.
-    return sorted((p for p in folder.iterdir()
-                   if p.suffix.lower() in IMAGE_EXTENSIONS and not p.name.startswith(".") and p.is_file()),
-                  key=_natural_key)
+    # Hidden files (macOS's ._0001.jpg beside 0001.jpg, copied from its disks) are not frames. os.scandir's entries
+    # know whether they are files without a stat() each: a LaSOT or TrackingNet root lists millions of images.
+    with os.scandir(folder) as entries:
+        names = [e.name for e in entries
+                 if not e.name.startswith(".") and os.path.splitext(e.name)[1].lower() in IMAGE_EXTENSIONS
+                 and e.is_file()]
+    return [folder / name for name in sorted(names, key=_natural_name_key)]
 
 
-def _image_sequence(name: str, kind: str, folder: Path, gt_path: Path, files: list[Path]) -> Sequence:
-    full = read_box_text(gt_path, source=kind)
+def _image_sequence(name: str, kind: str, folder: Path, gt_path: Path, files: list[Path], *,
+                    one_based: bool | None = None, absent=None, flags: dict | None = None,
+                    fps: float = IMAGE_FPS) -> Sequence:
+    """An image sequence; ``absent`` (bool per line) marks lines not scored, as its ``flags`` files say (``{path:
+    values}``, each noted if shorter than the ground truth)."""
+    full = read_box_text(gt_path, source=kind, one_based=one_based, absent=absent)
     gt = full.truncated(len(files))
     start = gt.first_valid
-    return Sequence(name, kind, folder, gt_path, gt, gt.initial_roi(), start, len(files), IMAGE_FPS, tuple(files),
-                    notes=_alignment_notes(gt_path, len(full), files))
+    notes = tuple(f"{path} has {len(values)} flags for the {len(full)} lines of {gt_path}; the lines past its end "
+                  f"are scored as though the target were present" for path, values in (flags or {}).items()
+                  if len(values) < len(full))
+    return Sequence(name, kind, folder, gt_path, gt, gt.initial_roi(), start, len(files), fps, tuple(files),
+                    notes=_alignment_notes(gt_path, len(full), files) + notes)
 
 
 def _alignment_notes(gt_path: Path, n_lines: int, files: list[Path]) -> tuple[str, ...]:
@@ -263,7 +302,7 @@ def _alignment_notes(gt_path: Path, n_lines: int, files: list[Path]) -> tuple[st
     elif n_lines > len(files):
         notes.append(f"{gt_path} has {n_lines} lines for {len(files)} images; line k is matched to the k-th image, "
                      f"and the lines after the last image are not used")
-    numbers = [re.search(r"(\d+)$", f.stem) for f in files]
+    numbers = [_TRAILING_NUMBER.search(os.path.splitext(f.name)[0]) for f in files]
     if all(numbers) and len(numbers) > 1:
         values = [int(m.group(1)) for m in numbers]
         gap = next((i for i in range(1, len(values)) if values[i] != values[i - 1] + 1), None)
@@ -313,6 +352,141 @@ def video_sequence(video: Path, gt_path: Path | None = None) -> Sequence:
     return Sequence(stem, "lptrack", video, gt_path, gt, roi, start, n, fps, None)
 
 
+def _read_flags(path: Path) -> np.ndarray:
+    """The whole numbers of a benchmark's per-frame label file, in order: LaSOT's ``full_occlusion.txt`` (one line,
+    comma-separated) or GOT-10k's ``absence.label`` (one per line)."""
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        raise GroundTruthError(f"cannot read '{path}': {exc.strerror or exc}") from None
+    fields = [f for f in re.split(r"[,\s]+", text) if f]
+    try:
+        return np.array([int(float(f)) for f in fields], int)
+    except ValueError:
+        bad = next(f for f in fields if not re.fullmatch(r"[-+]?\d+(\.0*)?", f))
+        raise GroundTruthError(f"'{path}': '{bad[:20]}' is not a whole number; expected one number per frame, "
+                               "separated by commas or line breaks") from None
+
+
+def _absent(flags: list[np.ndarray]) -> np.ndarray:
+    """Frames any of ``flags`` (0/1 arrays, of any lengths) marks, as one boolean array."""
+    out = np.zeros(max(len(f) for f in flags), bool)
+    for f in flags:
+        out[: len(f)] |= f != 0
+    return out
+
+
+#: LaSOT's per-frame flags beside its groundtruth.txt: a frame flagged in either has no target to score.
+_LASOT_FLAGS = ("full_occlusion.txt", "out_of_view.txt")
+
+
+def _lasot_sequence(folder: Path, img: list[Path]) -> Sequence:
+    """A LaSOT sequence folder: ``img/`` + ``groundtruth.txt`` (1-based x,y,w,h) + its absence flags."""
+    flags = {folder / name: _read_flags(folder / name) for name in _LASOT_FLAGS}
+    gt_path = folder / "groundtruth.txt"
+    return _image_sequence(folder.name, "lasot", folder, gt_path, img, one_based=True,
+                           absent=_absent(list(flags.values())), flags=flags)
+
+
+def _is_got10k(folder: Path) -> bool:
+    """Whether ``folder`` looks like a GOT-10k sequence (its labels, its meta_info.ini or its published name)."""
+    return (folder.name.startswith("GOT-10k_") or (folder / "absence.label").is_file()
+            or (folder / "meta_info.ini").is_file())
+
+
+def _one_line(path: Path) -> bool:
+    """Whether a ground-truth text has at most one non-empty line (a test split's: the first frame's box only)."""
+    try:
+        with path.open("rb") as f:
+            return sum(1 for line in f if line.strip()) <= 1
+    except OSError:
+        return False
+
+
+def _got10k_fps(folder: Path) -> float:
+    """``anno_fps`` of a GOT-10k ``meta_info.ini`` (``anno_fps: 10Hz``), else :data:`GOT10K_FPS`."""
+    try:
+        found = re.search(r"^anno_fps:\s*([0-9.]+)", (folder / "meta_info.ini").read_text(errors="replace"), re.M)
+    except OSError:
+        found = None
+    fps = float(found.group(1)) if found and re.fullmatch(r"\d+(\.\d*)?", found.group(1)) else 0.0
+    return fps if fps > 0 else GOT10K_FPS
+
+
+def _got10k_sequence(folder: Path, files: list[Path]) -> Sequence:
+    """A GOT-10k train or val sequence: frames in the folder + ``groundtruth.txt`` (1-based x,y,w,h) +
+    ``absence.label`` (and ``cover.label`` if present)."""
+    flags = {folder / "absence.label": _read_flags(folder / "absence.label")}
+    cover = folder / "cover.label"
+    if cover.is_file():
+        flags[cover] = _read_flags(cover)
+    absent = _absent([flags[folder / "absence.label"]] + ([(flags[cover] == 0).astype(int)] if cover in flags
+                                                          else []))
+    gt_path = folder / "groundtruth.txt"
+    return _image_sequence(folder.name, "got10k", folder, gt_path, files, one_based=True, absent=absent,
+                           fps=_got10k_fps(folder), flags=flags)
+
+
+def _got10k_unscored(folder: Path) -> str | None:
+    """Why a GOT-10k sequence folder (frames + ``groundtruth.txt``) cannot be scored, or None if it can."""
+    gt_path = folder / "groundtruth.txt"
+    if _one_line(gt_path):
+        return ("groundtruth.txt with one line, the first frame's box (GOT-10k's test split, whose ground truth is "
+                "kept for its evaluation server): nothing to score")
+    if not (folder / "absence.label").is_file():
+        return ("GOT-10k's groundtruth.txt and images but no absence.label beside them, which says the frames "
+                "where the target is absent")
+    return None
+
+
+def _is_trackingnet_split(folder: Path) -> bool:
+    """Whether ``folder`` is a TrackingNet split (``TRAIN_0`` ... ``TEST``): ``frames/`` and ``anno/`` in it."""
+    return (folder / "frames").is_dir() and (folder / "anno").is_dir()
+
+
+def _trackingnet_split(folder: Path) -> tuple[list[Sequence], list[tuple[Path, str]]]:
+    """The sequences of a TrackingNet split, and what it holds that cannot be scored: the videos whose ``anno``
+    file has one line (the test split's), those without frames and those without an ``anno`` file."""
+    frames, anno = folder / "frames", folder / "anno"
+    with os.scandir(anno) as entries:
+        boxes = {e.name[:-4]: anno / e.name for e in entries
+                 if e.name.endswith(".txt") and not e.name.startswith(".") and e.is_file()}
+    with os.scandir(frames) as entries:
+        videos = {e.name for e in entries if not e.name.startswith(".") and e.is_dir()}
+    found: list[Sequence] = []
+    first_only: list[str] = []
+    unread: list[tuple[Path, str]] = []
+    for name in sorted(boxes.keys() | videos, key=_natural_name_key):
+        if name not in videos:
+            unread.append((boxes[name], f"no frames in '{frames / name}'"))
+            continue
+        files = _images_in(frames / name)
+        if name not in boxes or not files:
+            unread.append((frames / name, f"no ground truth '{anno / (name + '.txt')}'" if files
+                           else "no images"))
+        elif _one_line(boxes[name]) and len(files) > 1:
+            first_only.append(name)
+        else:
+            found.append(_image_sequence(name, "trackingnet", frames / name, boxes[name], files, one_based=False))
+    if first_only:
+        why = ("one line, the first frame's box (TrackingNet's test split, whose ground truth is kept for its "
+               "evaluation server): nothing to score")
+        if found or unread:
+            unread.extend((frames / name, f"{anno / (name + '.txt')} of {why}") for name in first_only)
+        else:
+            count = "1 video whose" if len(first_only) == 1 else f"{len(first_only)} videos whose"
+            unread.append((folder, f"{count} anno/<video>.txt has {why}"))
+    return found, unread
+
+
+def _trackingnet_video(folder: Path) -> Path | None:
+    """The ``anno/<video>.txt`` of a TrackingNet ``frames/<video>`` folder, or None."""
+    if folder.parent.name != "frames":
+        return None
+    anno = folder.parent.parent / "anno" / f"{folder.name}.txt"
+    return anno if anno.is_file() else None
+
+
 #: Sub-folders that hold a sequence's frames (OTB's and UAV123's ``img/``; VOT's ``imgs/`` or ``color/``, or the
 #: folder itself): never searched for sequences of their own.
 _OTB_FRAME_FOLDER = "img"
@@ -341,8 +515,25 @@ def sequences_in(folder: Path) -> list[Sequence]:
             name = folder.name + (f"-{suffix}" if suffix else "")
             found.append(_image_sequence(name, "otb", folder, gt_path, img))
         return found
-    # VOT: groundtruth.txt + frames in the folder, imgs/ or color/.
+    # LaSOT: img/ + groundtruth.txt + the absence flags.
     vot = folder / "groundtruth.txt"
+    if img and vot.is_file() and all((folder / name).is_file() for name in _LASOT_FLAGS):
+        return [_lasot_sequence(folder, img)]
+    # GOT-10k: groundtruth.txt + absence.label + frames in the folder (the test split's, one line: not scored).
+    if vot.is_file() and _is_got10k(folder):
+        files = _images_in(folder)
+        if files:
+            return [] if _got10k_unscored(folder) else [_got10k_sequence(folder, files)]
+    # TrackingNet: a split (frames/ + anno/), or one frames/<video> folder.
+    if _is_trackingnet_split(folder):
+        return _trackingnet_split(folder)[0]
+    anno = _trackingnet_video(folder)
+    if anno is not None:
+        files = _images_in(folder)
+        if files and not (_one_line(anno) and len(files) > 1):
+            return [_image_sequence(folder.name, "trackingnet", folder, anno, files, one_based=False)]
+        return []
+    # VOT: groundtruth.txt + frames in the folder, imgs/ or color/.
     if vot.is_file():
         for sub in (folder, *(folder / name for name in _VOT_FRAME_FOLDERS)):
             files = _images_in(sub)
@@ -383,6 +574,11 @@ def discover(path, unread: list[tuple[Path, str]] | None = None) -> list[Sequenc
 
 
 def _discover(folder: Path, depth: int, unread: list[tuple[Path, str]]) -> list[Sequence]:
+    if _is_trackingnet_split(folder):
+        # Its frames/<video> folders are sequences read with anno/: not searched one by one.
+        found, skipped = _trackingnet_split(folder)
+        unread.extend(skipped)
+        return found
     found = sequences_in(folder)
     if found and found[0].frame_files is not None:
         return found  # an image sequence's folder: what is below it are its frames
@@ -412,6 +608,12 @@ def _what_it_lacks(folder: Path) -> str | None:
     or videos: what it lacks to be one, as a phrase after "it has". None for any other folder, or one that cannot be
     read."""
     try:
+        if (folder / "groundtruth.txt").is_file() and _is_got10k(folder) and _images_in(folder):
+            return _got10k_unscored(folder)
+        anno = _trackingnet_video(folder)
+        if anno is not None:
+            return (f"{anno} of one line, the first frame's box (TrackingNet's test split, whose ground truth is kept "
+                    f"for its evaluation server): nothing to score") if _images_in(folder) else None
         otb_frames = _images_in(folder / _OTB_FRAME_FOLDER)
         vot_frames = next((sub for sub in (folder, *(folder / n for n in _VOT_FRAME_FOLDERS)) if _images_in(sub)),
                           None)
@@ -429,6 +631,11 @@ def _what_it_lacks(folder: Path) -> str | None:
                else "groundtruth.txt (VOT)")
     if not truth:
         return f"images in '{frames}' but no ground truth beside them; with images there lptrack reads {readers}"
+    if otb_frames and truth[0].name == "groundtruth.txt":
+        lacking = " and ".join(name for name in _LASOT_FLAGS if not (folder / name).is_file())
+        return (f"groundtruth.txt and images in '{frames}' but not LaSOT's {lacking} beside them, which say the "
+                f"frames where the target is absent; with images there lptrack reads groundtruth.txt with those "
+                f"(LaSOT), {readers}")
     return (f"{truth[0].name} and images in '{frames}', which lptrack does not read together; with images there it "
             f"reads {readers}")
 
@@ -436,12 +643,16 @@ def _what_it_lacks(folder: Path) -> str | None:
 def load_ground_truth(path) -> GroundTruth:
     """Ground truth from a file in any supported format, or from a sequence folder / sample video.
 
+    A LaSOT or GOT-10k ``groundtruth.txt`` and a TrackingNet ``anno/<video>.txt`` are read with their sequence (its
+    absence flags, one row per image), as :func:`discover` reads them.
+
     Raises
     ------
     InputError
         If ``path`` does not exist.
     UsageError
-        If ``path`` is a folder holding no sequence or several.
+        If ``path`` is a folder holding no sequence or several, or the ground truth of a test split (its first
+        frame's box only).
     GroundTruthError
         If the file cannot be read.
     """
@@ -451,9 +662,25 @@ def load_ground_truth(path) -> GroundTruth:
     if path.is_file() and path.suffix.lower() not in VIDEO_EXTENSIONS:
         from .evaluate import read_ground_truth
 
+        folder = _flagged_sequence_folder(path)
+        if folder is not None:  # read with its flags and its coordinates' origin, as bench reads it
+            return discover_one(folder, "give the ground truth of a sequence with a box for every frame (a train "
+                                        "or val split's)").gt
         return read_ground_truth(path)
     return discover_one(path, "give one sequence folder or ground-truth file (.gt.csv, groundtruth_rect.txt, "
                               "groundtruth.txt, <name>.txt)").gt
+
+
+def _flagged_sequence_folder(path: Path) -> Path | None:
+    """The sequence folder a LaSOT or GOT-10k ``groundtruth.txt``, or a TrackingNet ``anno/<video>.txt``, belongs to
+    (its labels and coordinates' origin are known only with it); None for any other file."""
+    folder = path.parent
+    if path.name == "groundtruth.txt" and (all((folder / name).is_file() for name in _LASOT_FLAGS)
+                                           or _is_got10k(folder)):
+        return folder
+    if folder.name == "anno" and path.suffix == ".txt" and (folder.parent / "frames" / path.stem).is_dir():
+        return folder.parent / "frames" / path.stem
+    return None
 
 
 def ground_truth_file(path) -> Path:
@@ -484,4 +711,4 @@ def discover_one(path, expected: str) -> Sequence:
 
 __all__ = ["Sequence", "discover", "discover_one", "sequences_in", "video_sequence", "load_ground_truth",
            "ground_truth_file",
-           "GroundTruthError", "IMAGE_FPS"]
+           "GroundTruthError", "IMAGE_FPS", "GOT10K_FPS"]

@@ -471,8 +471,9 @@ def parse_number_lines(text: str, *, source: str = "ground truth") -> list[list[
     return rows
 
 
-def read_box_text(path, *, one_based: bool | None = None, source: str | None = None) -> GroundTruth:
-    """Read an OTB/UAV123 ``x,y,w,h`` file or a VOT file (``x,y,w,h`` or 8-number polygons).
+def read_box_text(path, *, one_based: bool | None = None, source: str | None = None,
+                  absent: np.ndarray | None = None) -> GroundTruth:
+    """Read an OTB/UAV123/LaSOT/GOT-10k/TrackingNet ``x,y,w,h`` file or a VOT file (``x,y,w,h`` or 8-number polygons).
 
     Parameters
     ----------
@@ -484,13 +485,17 @@ def read_box_text(path, *, one_based: bool | None = None, source: str | None = N
     source : str, optional
         Format name stored in the result; default ``vot`` for ``groundtruth.txt``, ``otb`` for
         ``groundtruth_rect*.txt``, else ``uav123``.
+    absent : array of bool, optional
+        Frames whose line is not scored whatever box it holds, as a benchmark's own flags say the target is absent
+        there (LaSOT's full occlusion and out of view, GOT-10k's absence): ``absent[k]`` for line ``k + 1``; lines
+        past its end are read as usual.
 
     Returns
     -------
     GroundTruth
         Rotated (VOT polygons fitted with ``cv2.minAreaRect``, see :func:`unwrap_rects`) if any line has 8
-        numbers, else axis-aligned. Lines of NaN, empty lines, and boxes with ``w <= 0`` or ``h <= 0`` are
-        unscored.
+        numbers, else axis-aligned. Lines of NaN, empty lines, boxes with ``w <= 0`` or ``h <= 0``, and the
+        lines of ``absent`` frames are unscored.
 
     Raises
     ------
@@ -520,13 +525,17 @@ def read_box_text(path, *, one_based: bool | None = None, source: str | None = N
     shift = 1.0 if one_based else 0.0
     polygons = any(len(r) == 8 for r in rows)
     out = np.full((len(rows), 5 if polygons else 4), np.nan)
+    flagged = np.zeros(len(rows), bool)
+    if absent is not None:
+        absent = np.asarray(absent, bool)[: len(rows)]
+        flagged[: len(absent)] = absent
     for k, row in enumerate(rows):
         if len(row) == 0 or all(math.isnan(v) for v in row):
             continue
         if len(row) not in (4, 8):
             raise GroundTruthError(f"'{path}', line {k + 1}: {len(row)} numbers; expected 4 (x,y,w,h) or 8 "
                                    "(x1,y1,...,x4,y4)")
-        if any(math.isnan(v) for v in row):
+        if flagged[k] or any(math.isnan(v) for v in row):
             continue
         if len(row) == 4:
             x, y, w, h = row

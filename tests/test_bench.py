@@ -642,7 +642,7 @@ def test_bench_says_which_folders_it_skipped_and_why(tmp_path):
     no_images.mkdir()
     (no_images / "groundtruth.txt").write_text("1,2,3,4\n")
     (tmp_path / "empty").mkdir()  # holds nothing: not a sequence, and nothing to say
-    # Ground truth and images that lptrack does not read together (LaSOT's img/ + groundtruth.txt).
+    # LaSOT's img/ + groundtruth.txt without its flags of the frames where the target is absent.
     mixed = _otb_folder(tmp_path, "stand", poses, roi)
     (mixed / "groundtruth_rect.txt").rename(mixed / "groundtruth.txt")
     cv2.imwrite(str(tmp_path / "cover.jpg"), np.zeros((8, 8, 3), np.uint8))  # a stray image beside the sequences
@@ -651,8 +651,10 @@ def test_bench_says_which_folders_it_skipped_and_why(tmp_path):
         f"them; with images there lptrack reads groundtruth_rect.txt (OTB) or run.txt (UAV123)",
         f"lptrack: note: skipped '{no_images}', which has groundtruth.txt but no images (in img/, imgs/, color/ or "
         f"the folder itself)",
-        f"lptrack: note: skipped '{mixed}', which has groundtruth.txt and images in '{mixed / 'img'}', which lptrack "
-        f"does not read together; with images there it reads groundtruth_rect.txt (OTB) or stand.txt (UAV123)"]
+        f"lptrack: note: skipped '{mixed}', which has groundtruth.txt and images in '{mixed / 'img'}' but not "
+        f"LaSOT's full_occlusion.txt and out_of_view.txt beside them, which say the frames where the target is "
+        f"absent; with images there lptrack reads groundtruth.txt with those (LaSOT), groundtruth_rect.txt (OTB) or "
+        f"stand.txt (UAV123)"]
     assert "lptrack: note:" not in _run("bench", "--dataset", tmp_path, "--trackers", "fixed", "-q").stderr
     # With the notes, --json is written as with -q (the notes' list once took the place of the skipped trackers').
     docs = []

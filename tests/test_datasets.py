@@ -269,3 +269,147 @@ def test_one_sequence_asked_for_where_there_is_none_says_why(tmp_path):
             f"'{folder}' holds 0 sequences: it has images in '{folder / 'img'}' but no ground truth beside them; with "
             f"images there lptrack reads groundtruth_rect.txt (OTB) or walk.txt (UAV123); {expected}"
             + (" (.gt.csv, groundtruth_rect.txt, groundtruth.txt, <name>.txt)" if call is load_ground_truth else ""))
+
+
+def _named_images(folder: Path, names: list[str]) -> Path:
+    """Tiny frames named as given, the k-th (in the order given) of grey level 10 * (k + 1)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for k, name in enumerate(names):
+        cv2.imwrite(str(folder / name), np.full((32, 48, 3), 10 * (k + 1), np.uint8))
+    return folder
+
+
+def _lasot(root: Path, name: str, lines: list[str], occluded: list[int], out_of_view: list[int]) -> Path:
+    """A LaSOT sequence as published: <class>/<class>-<n>/img/00000001.jpg ..., comma-separated groundtruth.txt, and
+    the two flag files of one comma-separated line each."""
+    seq = root / name.rsplit("-", 1)[0] / name
+    _named_images(seq / "img", [f"{i:08d}.jpg" for i in range(1, len(lines) + 1)])
+    (seq / "groundtruth.txt").write_text("".join(line + "\n" for line in lines))
+    (seq / "full_occlusion.txt").write_text(",".join(map(str, occluded)))
+    (seq / "out_of_view.txt").write_text(",".join(map(str, out_of_view)))
+    (seq / "nlp.txt").write_text("white cat lying on the sofa\n")
+    return seq
+
+
+def test_lasot_root_class_folders_and_absent_frames(tmp_path):
+    """A LaSOT root is read through its class folders (img/ + groundtruth.txt was skipped as a pair lptrack did not
+    read); frames flagged fully occluded or out of view are not scored whatever their box (LaSOT leaves such boxes
+    arbitrary: 1,1,-1,-1, or a plausible box where the target was last seen), and 1-based boxes move by -1 px."""
+    root = tmp_path / "LaSOT"
+    cat = _lasot(root, "cat-1", ["11,21,10,6", "12,21,10,6", "1,1,-1,-1", "40,30,10,6", "14,21,10,6"],
+                 [0, 0, 1, 0, 0], [0, 0, 0, 1, 0])
+    # A sequence whose first frame has its target out of view: the tracker starts on the next.
+    _lasot(root, "cat-10", ["20,20,8,8", "21,21,8,8", "22,21,8,8"], [0, 0, 0], [1, 0, 0])
+    _lasot(root, "bear-2", ["5,5,8,8", "6,5,8,8"], [0, 0], [0, 0])
+    unread: list = []
+    seqs = discover(root, unread)
+    assert unread == []
+    assert [(s.name, s.kind) for s in seqs] == [("bear-2", "lasot"), ("cat-1", "lasot"), ("cat-10", "lasot")]
+    bear, first, late = seqs
+    assert (first.path, first.gt_path, first.n_frames, first.start) == (cat, cat / "groundtruth.txt", 5, 0)
+    assert first.gt.valid.tolist() == [True, True, False, False, True]  # line 4's box is plausible but flagged
+    assert (first.roi.cx, first.roi.cy, first.roi.a, first.roi.b) == (15, 23, 5, 3)  # x = 11 - 1, + w / 2
+    assert [int(f.mean()) for _, _, f in first.frames()] == pytest.approx([10, 20, 30, 40, 50], abs=2)
+    assert (late.start, late.gt.valid.tolist(), late.roi.cx) == (1, [False, True, True], 24)  # 21 - 1 + 4
+    assert first.fps == 30.0 and first.notes == ()
+    # eval reads the file with its flags, as bench does.
+    assert load_ground_truth(cat / "groundtruth.txt").valid.tolist() == [True, True, False, False, True]
+
+
+def test_lasot_folder_without_its_flags_says_what_it_lacks(tmp_path):
+    seq = _lasot(tmp_path, "cat-1", ["11,21,10,6", "12,21,10,6"], [0, 0], [0, 0])
+    (seq / "out_of_view.txt").unlink()
+    unread: list = []
+    assert discover(tmp_path, unread) == []
+    assert unread == [(seq, f"groundtruth.txt and images in '{seq / 'img'}' but not LaSOT's out_of_view.txt beside "
+                            f"them, which say the frames where the target is absent; with images there lptrack reads "
+                            f"groundtruth.txt with those (LaSOT), groundtruth_rect.txt (OTB) or cat-1.txt (UAV123)")]
+
+
+def _got10k(split: Path, name: str, lines: list[str], absence: list[int] | None, cover: list[int] | None) -> Path:
+    """A GOT-10k sequence as published: frames in the folder, groundtruth.txt, one label per line, meta_info.ini, and
+    the split's list.txt."""
+    seq = split / name
+    _named_images(seq, [f"{i:08d}.jpg" for i in range(1, 4 if absence is None else len(absence) + 1)])
+    (seq / "groundtruth.txt").write_text("".join(line + "\n" for line in lines))
+    for label, values in (("absence", absence), ("cover", cover), ("cut_by_image", absence)):
+        if values is not None:
+            (seq / f"{label}.label").write_text("".join(f"{v}\n" for v in values))
+    (seq / "meta_info.ini").write_text("[METAINFO]\nobject_class: cat\nanno_fps: 10Hz\nresolution: (48, 32)\n")
+    with open(split / "list.txt", "a") as f:
+        f.write(name + "\n")
+    return seq
+
+
+def test_got10k_val_split_and_absent_frames(tmp_path):
+    """GOT-10k's frames lie in the sequence folder beside groundtruth.txt, as VOT's do: it was read as VOT (0-based,
+    every box scored). Frames with absence 1 or cover 0 are not scored, as the toolkit's evaluation leaves out
+    frames whose cover is 0; boxes are 1-based; its frame rate is 10 fps."""
+    split = tmp_path / "GOT-10k" / "val"
+    seq = _got10k(split, "GOT-10k_Val_000001", ["11,21,10,6", "12,21,10,6", "0,0,0,0", "14,21,10,6", "15,21,10,6"],
+                  absence=[0, 0, 1, 0, 0], cover=[8, 5, 0, 0, 7])
+    _got10k(split, "GOT-10k_Val_000002", ["5,5,8,8"] * 3, absence=[0, 0, 0], cover=[8, 8, 8])
+    unread: list = []
+    seqs = discover(tmp_path, unread)
+    assert unread == [] and [(s.name, s.kind) for s in seqs] == [("GOT-10k_Val_000001", "got10k"),
+                                                                 ("GOT-10k_Val_000002", "got10k")]
+    got = seqs[0]
+    assert (got.path, got.n_frames, got.start, got.fps) == (seq, 5, 0, 10.0)
+    assert got.gt.valid.tolist() == [True, True, False, False, True]  # absent, then fully covered
+    assert (got.roi.cx, got.roi.cy, got.roi.a, got.roi.b) == (15, 23, 5, 3)  # x = 11 - 1, + w / 2
+    assert [f.name for f in got.frame_files] == [f"{i:08d}.jpg" for i in range(1, 6)]
+    assert load_ground_truth(seq / "groundtruth.txt").valid.tolist() == [True, True, False, False, True]
+
+
+def test_got10k_test_split_is_said_to_be_unscorable(tmp_path):
+    """The test split's groundtruth.txt holds the first frame's box only: the sequence was tracked and scored on its
+    first frame, as a VOT folder; it is skipped, saying why."""
+    split = tmp_path / "test"
+    seq = _got10k(split, "GOT-10k_Test_000001", ["11,21,10,6"], absence=None, cover=None)
+    why = ("groundtruth.txt with one line, the first frame's box (GOT-10k's test split, whose ground truth is kept for "
+           "its evaluation server): nothing to score")
+    unread: list = []
+    assert discover(split, unread) == [] and unread == [(seq, why)]
+    with pytest.raises(UsageError, match=r"holds 0 sequences: it has groundtruth\.txt with one line, the first "):
+        load_ground_truth(seq / "groundtruth.txt")
+
+
+def _trackingnet(split: Path, video: str, n_frames: int, lines: list[str]) -> Path:
+    """A TrackingNet video as published: <split>/frames/<video>/0.jpg, 1.jpg, ... (unpadded) and
+    <split>/anno/<video>.txt, with the split's zips/ beside them."""
+    frames = _named_images(split / "frames" / video, [f"{i}.jpg" for i in range(n_frames)])
+    (split / "anno").mkdir(exist_ok=True)
+    (split / "anno" / f"{video}.txt").write_text("".join(line + "\n" for line in lines))
+    (split / "zips").mkdir(exist_ok=True)
+    return frames
+
+
+def test_trackingnet_splits_unpadded_frame_names_and_test_split(tmp_path):
+    """TrackingNet's frames (0.jpg ... 11.jpg) and boxes (anno/<video>.txt, 0-based) lie in two folders of its split:
+    each video is a sequence, its frames in numeric order (10.jpg after 9.jpg). The test split's files have one line
+    each: it is skipped, saying why."""
+    root = tmp_path / "TrackingNet"
+    lines = [f"{10 + i},20,10,6" for i in range(12)]
+    frames = _trackingnet(root / "TRAIN_0", "a3Ck0U-5_EE_0", 12, lines)
+    _trackingnet(root / "TRAIN_1", "B1b9kGnb1B8_1", 3, lines[:3])
+    _trackingnet(root / "TEST", "zz0Rn1ja_0", 12, lines[:1])
+    _trackingnet(root / "TEST", "zz0Rn1ja_1", 12, lines[:1])
+    unread: list = []
+    seqs = discover(root, unread)
+    assert [(s.name, s.kind) for s in seqs] == [("a3Ck0U-5_EE_0", "trackingnet"), ("B1b9kGnb1B8_1", "trackingnet")]
+    assert unread == [(root / "TEST", "2 videos whose anno/<video>.txt has one line, the first frame's box "
+                                      "(TrackingNet's test split, whose ground truth is kept for its evaluation "
+                                      "server): nothing to score")]
+    seq = seqs[0]
+    assert (seq.path, seq.gt_path, seq.n_frames, seq.start, seq.notes) == (
+        frames, root / "TRAIN_0" / "anno" / "a3Ck0U-5_EE_0.txt", 12, 0, ())
+    assert [f.name for f in seq.frame_files][8:] == ["8.jpg", "9.jpg", "10.jpg", "11.jpg"]
+    assert [int(f.mean()) for _, _, f in seq.frames()] == pytest.approx([10 * (k + 1) for k in range(12)], abs=2)
+    assert (seq.roi.cx, seq.roi.cy, seq.roi.a, seq.roi.b) == (15, 23, 5, 3)  # 0-based: x = 10, + w / 2
+    assert seq.gt.valid.all()
+    # One video's frames folder, or its anno file, is read as the same sequence (lptrack eval's ground truth).
+    (alone,) = discover(frames)
+    assert (alone.name, alone.gt_path, alone.roi) == (seq.name, seq.gt_path, seq.roi)
+    np.testing.assert_array_equal(load_ground_truth(seq.gt_path).boxes, seq.gt.boxes)
+    with pytest.raises(UsageError, match=r"holds 0 sequences: it has .*zz0Rn1ja_0\.txt of one line, the first "):
+        load_ground_truth(root / "TEST" / "anno" / "zz0Rn1ja_0.txt")

@@ -31,9 +31,18 @@ Datasets (--dataset, repeatable; default: the project's sample_videos/):
   VOT              frames (or imgs/, color/) + groundtruth.txt (x,y,w,h or
                    8-number rotated quadrilateral)
   UAV123           img/ + <name>.txt (x,y,w,h, 1-based)
-  or a folder of such folders. Trackers start on the first frame with ground
-  truth from the ellipse inscribed in its box; frames without ground truth
-  (NaN lines, more frames than lines) are not scored.
+  LaSOT            <class>/<class>-<n>/img/ + groundtruth.txt (x,y,w,h,
+                   1-based) + full_occlusion.txt + out_of_view.txt
+  GOT-10k          frames + groundtruth.txt (x,y,w,h, 1-based) +
+                   absence.label (+ cover.label); train and val splits
+  TrackingNet      TRAIN_k/frames/<video>/0.jpg... + TRAIN_k/anno/<video>.txt
+                   (x,y,w,h, 0-based)
+  or a folder of such folders (3 levels down). Trackers start on the first
+  frame with ground truth from the ellipse inscribed in its box; frames
+  without ground truth (NaN lines, more frames than lines) and frames a
+  benchmark flags as absent (LaSOT's full occlusion or out of view, GOT-10k's
+  absence or cover 0) are not scored. Test splits (one ground-truth line: the
+  first frame's) are skipped with a note.
 
 \b
 Columns (per sequence and tracker; 'mean' rows average over sequences):
@@ -368,8 +377,10 @@ def eval_command(prediction: Path, ground_truth: Path, json_out: str | None, vid
     """Score a run's CSV (PRED.csv from 'lptrack run'; '-': stdin) against ground truth GT.
 
     GT is a <name>.gt.csv, an OTB groundtruth_rect.txt, a VOT groundtruth.txt,
-    a UAV123 <name>.txt, a sequence folder holding one of them, or a video
-    (its <name>.gt.csv beside it, as in sample_videos/). Frames are
+    a UAV123 <name>.txt, a LaSOT or GOT-10k groundtruth.txt or TrackingNet
+    anno/<video>.txt (read with their sequence's absence flags), a sequence
+    folder holding one of them, or a video (its <name>.gt.csv beside it, as
+    in sample_videos/). Frames are
     matched by index (line k of a .txt file is frame k-1); the metrics are
     those of 'lptrack bench' (see 'lptrack bench --help'). A .gt.csv
     without a rotation_deg column has its rotation scored modulo 180

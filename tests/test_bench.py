@@ -682,6 +682,36 @@ def test_bench_says_which_folders_it_skipped_and_why(tmp_path):
         f"'{no_truth}', which has images in")
 
 
+def test_bench_on_a_lasot_root_leaves_absent_frames_unscored_and_skips_a_test_split(tmp_path):
+    """LaSOT's img/ + groundtruth.txt was skipped as a pair lptrack did not read; now its frames flagged out of view
+    or fully occluded are left out of the score (their boxes are arbitrary), and a GOT-10k test sequence (one line of
+    ground truth) is skipped with a note saying it cannot be scored."""
+    roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
+    seq = _otb_folder(tmp_path / "LaSOT" / "thing", "thing-1", [Pose(60.0, 70.0, 1.0, 0.0)] * 6, roi)
+    lines = (seq / "groundtruth_rect.txt").read_text().splitlines()
+    (seq / "groundtruth_rect.txt").unlink()
+    lines[3] = "1,1,-1,-1"  # as LaSOT writes an absent target's box
+    lines[4] = "150,10,30,30"  # an arbitrary box, far from the object: scored, it would cost a miss
+    (seq / "groundtruth.txt").write_text("\n".join(lines) + "\n")
+    (seq / "full_occlusion.txt").write_text("0,0,0,1,0,0")
+    (seq / "out_of_view.txt").write_text("0,0,0,0,1,0")
+    test = tmp_path / "GOT-10k" / "test" / "GOT-10k_Test_000001"
+    test.mkdir(parents=True)
+    for i in range(1, 4):
+        cv2.imwrite(str(test / f"{i:08d}.jpg"), np.zeros((32, 48, 3), np.uint8))
+    (test / "groundtruth.txt").write_text("10,10,8,8\n")
+    res = _run("bench", "--dataset", tmp_path, "--trackers", "fixed", "--json", "-")
+    assert res.exit_code == 0, res.stderr
+    assert [line for line in res.stderr.splitlines() if line.startswith("lptrack: note:")] == [
+        f"lptrack: note: skipped '{test}', which has groundtruth.txt with one line, the first frame's box (GOT-10k's "
+        f"test split, whose ground truth is kept for its evaluation server): nothing to score"]
+    doc = json.loads(res.stdout)
+    assert [(s["name"], s["kind"], s["frames"], s["scored_frames"]) for s in doc["sequences"]] == [
+        ("thing-1", "lasot", 6, 4)]
+    (result,) = doc["results"]
+    assert (result["frames_scored"], result["success_rate"]) == (4, 1.0)  # the object never moves
+
+
 def test_dataset_errors_say_where(tmp_path, dataset):
     roi = Ellipse(60.0, 70.0, 20.0, 20.0, 0.0)
     deep = tmp_path / "deep"

@@ -162,8 +162,9 @@ def collect_sequences(datasets: Iterable, unread: list[tuple[Path, str]] | None 
                 where += f"; skipped {count} '{skipped[0][0]}', which has {skipped[0][1]}"
             raise UsageError(f"no sequences found in '{dataset}' ({where}); expected "
                              "videos with .gt.csv sidecars, or OTB (img/ + groundtruth_rect.txt), VOT (groundtruth.txt "
-                             "+ frames), UAV123 (img/ + <name>.txt), LaSOT (img/ + groundtruth.txt + full_occlusion.txt "
-                             "+ out_of_view.txt), GOT-10k (frames + groundtruth.txt + absence.label) folders, "
+                             "+ frames), UAV123 (img/ + <name>.txt), LaSOT (img/ + groundtruth.txt + "
+                             "full_occlusion.txt + out_of_view.txt), GOT-10k (frames + groundtruth.txt + "
+                             "absence.label) folders, "
                              "TrackingNet splits (frames/ + anno/), or a folder of such folders")
         sequences.extend(found)
     # A sequence given twice (`--dataset data --dataset data/toy`) is run once, as `lptrack run` runs a video named

@@ -598,9 +598,23 @@ def _discover(folder: Path, depth: int, unread: list[tuple[Path, str]]) -> list[
     if not found:
         # Said only where nothing was found below: a stray image or video beside sequence folders is no sequence.
         lacking = _what_it_lacks(folder)
+        if lacking is None and depth == 0 and _has_subfolders(folder):
+            # The search stops here: sequences below (LaSOT's <class>/<class>-<n> under /data/LaSOT/LaSOTBenchmark,
+            # four down from /data) were left out in silence.
+            lacking = (f"sub-folders below the {SEARCH_DEPTH} levels searched under a dataset; give a folder nearer "
+                       f"its sequences (its parent, say) as the dataset")
         if lacking is not None:
             unread.append((folder, lacking))
     return found
+
+
+def _has_subfolders(folder: Path) -> bool:
+    """Whether ``folder`` holds a folder :func:`_discover` would search (not hidden, not a frames folder)."""
+    try:
+        with os.scandir(folder) as entries:
+            return any(e.is_dir() and not e.name.startswith(".") and e.name not in _FRAME_FOLDERS for e in entries)
+    except OSError:
+        return False
 
 
 def _what_it_lacks(folder: Path) -> str | None:

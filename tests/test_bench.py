@@ -717,8 +717,11 @@ def test_dataset_errors_say_where(tmp_path, dataset):
     deep = tmp_path / "deep"
     _otb_folder(deep / "a" / "b" / "c" / "d", "walk", [Pose(60.0, 70.0, 1.0, 0.0)] * 3, roi)
     res = _run("bench", "--dataset", deep, "--trackers", "fixed")
-    assert res.exit_code == 2 and res.stderr.startswith(f"lptrack: error: no sequences found in '{deep}' (searched 3 "
-                                                        f"folders down); expected")
+    # The folder where the search stopped is named (it was not: nothing said the sequence was one level too deep).
+    assert res.exit_code == 2 and res.stderr.startswith(
+        f"lptrack: error: no sequences found in '{deep}' (searched 3 folders down; skipped a folder "
+        f"'{deep / 'a' / 'b' / 'c'}', which has sub-folders below the 3 levels searched under a dataset; give a folder "
+        f"nearer its sequences (its parent, say) as the dataset); expected")
     twin = tmp_path / "twin"
     twin.mkdir()
     (twin / "alpha.avi").symlink_to(dataset / "alpha.avi")

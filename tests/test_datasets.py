@@ -326,6 +326,28 @@ def test_lasot_folder_without_its_flags_says_what_it_lacks(tmp_path):
                             f"groundtruth.txt with those (LaSOT), groundtruth_rect.txt (OTB) or cat-1.txt (UAV123)")]
 
 
+def test_sequences_below_the_search_depth_are_said_to_be_skipped(tmp_path):
+    """LaSOT extracted as published under /data/LaSOT is four levels below /data (LaSOT/LaSOTBenchmark/<class>/
+    <class>-<n>): a root mixing it with GOT-10k (three down) ran GOT-10k's sequences and left LaSOT's out without a
+    word. The class folders where the search stopped are now said to be skipped, and why."""
+    lasot = tmp_path / "LaSOT" / "LaSOTBenchmark"
+    _lasot(lasot, "cat-1", ["11,21,10,6", "12,21,10,6"], [0, 0], [0, 0])
+    _lasot(lasot, "bear-2", ["5,5,8,8", "6,5,8,8"], [0, 0], [0, 0])
+    _got10k(tmp_path / "GOT-10k" / "val", "GOT-10k_Val_000001", ["5,5,8,8"] * 3, absence=[0, 0, 0], cover=[8, 8, 8])
+    unread: list = []
+    assert [s.name for s in discover(tmp_path, unread)] == ["GOT-10k_Val_000001"]
+    why = ("sub-folders below the 3 levels searched under a dataset; give a folder nearer its sequences (its parent, "
+           "say) as the dataset")
+    assert unread == [(lasot / "bear", why), (lasot / "cat", why)]
+    assert [s.name for s in discover(tmp_path / "LaSOT", [])] == ["bear-2", "cat-1"]  # a folder nearer: all read
+    # A folder at that depth with nothing below it, or only a sequence's frames, is not named.
+    (tmp_path / "a" / "b" / "c" / "img").mkdir(parents=True)
+    (tmp_path / "a" / "b" / "d").mkdir()
+    unread = []
+    discover(tmp_path, unread)
+    assert [folder for folder, _ in unread] == [lasot / "bear", lasot / "cat"]
+
+
 def _got10k(split: Path, name: str, lines: list[str], absence: list[int] | None, cover: list[int] | None) -> Path:
     """A GOT-10k sequence as published: frames in the folder, groundtruth.txt, one label per line, meta_info.ini, and
     the split's list.txt."""

@@ -380,12 +380,17 @@ def _absent(flags: list[np.ndarray]) -> np.ndarray:
 _LASOT_FLAGS = ("full_occlusion.txt", "out_of_view.txt")
 
 
+def _lasot_flags(folder: Path) -> tuple[dict, np.ndarray]:
+    """A LaSOT sequence folder's flag files (``{path: values}``) and the frames they mark absent."""
+    flags = {folder / name: _read_flags(folder / name) for name in _LASOT_FLAGS}
+    return flags, _absent(list(flags.values()))
+
+
 def _lasot_sequence(folder: Path, img: list[Path]) -> Sequence:
     """A LaSOT sequence folder: ``img/`` + ``groundtruth.txt`` (1-based x,y,w,h) + its absence flags."""
-    flags = {folder / name: _read_flags(folder / name) for name in _LASOT_FLAGS}
+    flags, absent = _lasot_flags(folder)
     gt_path = folder / "groundtruth.txt"
-    return _image_sequence(folder.name, "lasot", folder, gt_path, img, one_based=True,
-                           absent=_absent(list(flags.values())), flags=flags)
+    return _image_sequence(folder.name, "lasot", folder, gt_path, img, one_based=True, absent=absent, flags=flags)
 
 
 def _is_got10k(folder: Path) -> bool:
@@ -413,15 +418,22 @@ def _got10k_fps(folder: Path) -> float:
     return fps if fps > 0 else GOT10K_FPS
 
 
-def _got10k_sequence(folder: Path, files: list[Path]) -> Sequence:
-    """A GOT-10k train or val sequence: frames in the folder + ``groundtruth.txt`` (1-based x,y,w,h) +
-    ``absence.label`` (and ``cover.label`` if present)."""
+def _got10k_flags(folder: Path) -> tuple[dict, np.ndarray]:
+    """A GOT-10k sequence folder's ``absence.label`` (and ``cover.label`` if present) as ``{path: values}``, and the
+    frames they mark absent (absence 1 or cover 0)."""
     flags = {folder / "absence.label": _read_flags(folder / "absence.label")}
     cover = folder / "cover.label"
     if cover.is_file():
         flags[cover] = _read_flags(cover)
     absent = _absent([flags[folder / "absence.label"]] + ([(flags[cover] == 0).astype(int)] if cover in flags
                                                           else []))
+    return flags, absent
+
+
+def _got10k_sequence(folder: Path, files: list[Path]) -> Sequence:
+    """A GOT-10k train or val sequence: frames in the folder + ``groundtruth.txt`` (1-based x,y,w,h) +
+    ``absence.label`` (and ``cover.label`` if present)."""
+    flags, absent = _got10k_flags(folder)
     gt_path = folder / "groundtruth.txt"
     return _image_sequence(folder.name, "got10k", folder, gt_path, files, one_based=True, absent=absent,
                            fps=_got10k_fps(folder), flags=flags)
@@ -658,7 +670,8 @@ def load_ground_truth(path) -> GroundTruth:
     """Ground truth from a file in any supported format, or from a sequence folder / sample video.
 
     A LaSOT or GOT-10k ``groundtruth.txt`` and a TrackingNet ``anno/<video>.txt`` are read with their sequence (its
-    absence flags, one row per image), as :func:`discover` reads them.
+    absence flags, one row per image), as :func:`discover` reads them; without its frames beside it, with its flags
+    and coordinates' origin all the same, one row per line.
 
     Raises
     ------
@@ -676,8 +689,11 @@ def load_ground_truth(path) -> GroundTruth:
     if path.is_file() and path.suffix.lower() not in VIDEO_EXTENSIONS:
         from .evaluate import read_ground_truth
 
-        folder = _flagged_sequence_folder(path)
-        if folder is not None:  # read with its flags and its coordinates' origin, as bench reads it
+        flagged = _flagged_sequence_folder(path)
+        if flagged is not None:  # read with its flags and its coordinates' origin, as bench reads it
+            kind, folder = flagged
+            if not _images_in(folder / _OTB_FRAME_FOLDER if kind == "lasot" else folder):
+                return _ground_truth_without_frames(path, kind, folder)
             return discover_one(folder, "give the ground truth of a sequence with a box for every frame (a train "
                                         "or val split's)").gt
         return read_ground_truth(path)
@@ -685,16 +701,42 @@ def load_ground_truth(path) -> GroundTruth:
                               "groundtruth.txt, <name>.txt)").gt
 
 
-def _flagged_sequence_folder(path: Path) -> Path | None:
-    """The sequence folder a LaSOT or GOT-10k ``groundtruth.txt``, or a TrackingNet ``anno/<video>.txt``, belongs to
-    (its labels and coordinates' origin are known only with it); None for any other file."""
+def _flagged_sequence_folder(path: Path) -> tuple[str, Path] | None:
+    """The benchmark (``lasot``, ``got10k``, ``trackingnet``) and sequence folder a LaSOT or GOT-10k
+    ``groundtruth.txt``, or a TrackingNet ``anno/<video>.txt`` (``frames/<video>``, extracted or not), belongs to:
+    its labels and coordinates' origin are known only with it. None for any other file."""
     folder = path.parent
-    if path.name == "groundtruth.txt" and (all((folder / name).is_file() for name in _LASOT_FLAGS)
-                                           or _is_got10k(folder)):
-        return folder
-    if folder.name == "anno" and path.suffix == ".txt" and (folder.parent / "frames" / path.stem).is_dir():
-        return folder.parent / "frames" / path.stem
+    if path.name == "groundtruth.txt" and all((folder / name).is_file() for name in _LASOT_FLAGS):
+        return "lasot", folder
+    if path.name == "groundtruth.txt" and _is_got10k(folder):
+        return "got10k", folder
+    split = folder.parent
+    if folder.name == "anno" and path.suffix == ".txt" and ((split / "frames").is_dir() or (split / "zips").is_dir()):
+        return "trackingnet", split / "frames" / path.stem
     return None
+
+
+def _ground_truth_without_frames(path: Path, kind: str, folder: Path) -> GroundTruth:
+    """A LaSOT, GOT-10k or TrackingNet ground-truth file whose frames are not beside it (the annotations kept
+    without the images, which scoring a run does not need), read as :func:`discover` reads it with them: with its
+    absence flags and from its coordinates' origin, one row per line.
+
+    Raises
+    ------
+    UsageError
+        A test split's file (its first frame's box only), or a GOT-10k one without ``absence.label``.
+    """
+    if _one_line(path):
+        raise UsageError(f"'{path}' has one line, the first frame's box (a test split's, whose ground truth is kept "
+                         f"for its evaluation server): nothing to score; give the ground truth of a sequence with a "
+                         f"box for every frame (a train or val split's)")
+    if kind == "trackingnet":
+        return read_box_text(path, source=kind, one_based=False)
+    if kind == "got10k" and not (folder / "absence.label").is_file():
+        raise UsageError(f"'{path}' is GOT-10k's, but no absence.label is beside it, which says the frames where "
+                         f"the target is absent; give the sequence's labels with its ground truth")
+    _, absent = _lasot_flags(folder) if kind == "lasot" else _got10k_flags(folder)
+    return read_box_text(path, source=kind, one_based=True, absent=absent)
 
 
 def ground_truth_file(path) -> Path:

@@ -435,3 +435,45 @@ def test_trackingnet_splits_unpadded_frame_names_and_test_split(tmp_path):
     np.testing.assert_array_equal(load_ground_truth(seq.gt_path).boxes, seq.gt.boxes)
     with pytest.raises(UsageError, match=r"holds 0 sequences: it has .*zz0Rn1ja_0\.txt of one line, the first "):
         load_ground_truth(root / "TEST" / "anno" / "zz0Rn1ja_0.txt")
+
+
+def test_benchmark_ground_truth_without_its_frames_is_read_with_its_flags(tmp_path):
+    """lptrack eval needs a run and its ground truth, not the frames: a LaSOT or GOT-10k groundtruth.txt copied with
+    its labels but without the images (LaSOT's are 227 GB) was refused ('holds 0 sequences: it has groundtruth.txt
+    but no images') where it had been read before LaSOT and GOT-10k were known, and a TrackingNet anno file whose
+    frames are not extracted was read as 1-based. They are read as bench reads them with their frames: flags, origin,
+    one row per line; a test split's single line is still refused."""
+    lasot = _lasot(tmp_path / "with", "cat-1", ["11,21,10,6", "12,21,10,6", "1,1,-1,-1", "40,30,10,6", "14,21,10,6"],
+                   [0, 0, 1, 0, 0], [0, 0, 0, 1, 0])
+    got = _got10k(tmp_path / "with" / "val", "GOT-10k_Val_000001", ["11,21,10,6", "12,21,10,6", "-1,-1,-1,-1",
+                                                                    "14,21,10,6", "15,21,10,6"],
+                  absence=[0, 0, 1, 0, 0], cover=[8, 5, 0, 0, 7])
+    tn = _trackingnet(tmp_path / "with" / "TRAIN_0", "a3Ck0U-5_EE_0", 4, [f"{10 + i},20,10,6" for i in range(4)])
+    files = {"lasot": (lasot, ["groundtruth.txt", "full_occlusion.txt", "out_of_view.txt"]),
+             "got10k": (got, ["groundtruth.txt", "absence.label", "cover.label", "meta_info.ini"]),
+             "trackingnet": (tn.parent.parent / "anno", ["a3Ck0U-5_EE_0.txt"])}
+    for kind, (folder, names) in files.items():
+        alone = tmp_path / "alone" / kind / folder.name
+        alone.mkdir(parents=True)
+        for name in names:
+            (alone / name).write_text((folder / name).read_text())
+        if kind == "trackingnet":
+            (alone.parent / "zips").mkdir()
+        with_frames = load_ground_truth(folder / names[0])
+        without = load_ground_truth(alone / names[0])
+        assert without.source == kind
+        np.testing.assert_array_equal(without.valid, with_frames.valid)
+        np.testing.assert_array_equal(without.boxes, with_frames.boxes)
+    assert load_ground_truth(tmp_path / "alone" / "lasot" / "cat-1" / "groundtruth.txt").valid.tolist() == [
+        True, True, False, False, True]
+    # Centre x: 0-based x = 10, + w / 2 (read as 1-based it was 14).
+    assert load_ground_truth(tmp_path / "alone" / "trackingnet" / "anno" / "a3Ck0U-5_EE_0.txt").boxes[0, 0] == 15
+    test = tmp_path / "alone" / "TEST"
+    (test / "anno").mkdir(parents=True)
+    (test / "zips").mkdir()
+    (test / "anno" / "zz0Rn1ja_0.txt").write_text("10,20,10,6\n")
+    with pytest.raises(UsageError, match=r"has one line, the first frame's box \(a test split's"):
+        load_ground_truth(test / "anno" / "zz0Rn1ja_0.txt")
+    (tmp_path / "alone" / "got10k" / "GOT-10k_Val_000001" / "absence.label").unlink()
+    with pytest.raises(UsageError, match=r"is GOT-10k's, but no absence\.label is beside it"):
+        load_ground_truth(tmp_path / "alone" / "got10k" / "GOT-10k_Val_000001" / "groundtruth.txt")

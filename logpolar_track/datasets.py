@@ -282,6 +282,12 @@ def _image_sequence(name: str, kind: str, folder: Path, gt_path: Path, files: li
     values}``, each noted if shorter than the ground truth)."""
     full = read_box_text(gt_path, source=kind, one_based=one_based, absent=absent)
     gt = full.truncated(len(files))
+    if not gt.valid.any():
+        # Said of the file: in a root of a thousand sequences, "the ground truth has no frame with a valid box" alone
+        # left the user to find which.
+        flagged = f", or flagged absent by {' or '.join(p.name for p in flags)}" if flags else ""
+        raise GroundTruthError(f"'{gt_path}' has no box to start the tracker from on any of the {len(files)} "
+                               f"images: every line is NaN, empty (w or h <= 0){flagged}")
     start = gt.first_valid
     notes = tuple(f"{path} has {len(values)} flags for the {len(full)} lines of {gt_path}; the lines past its end "
                   f"are scored as though the target were present" for path, values in (flags or {}).items()

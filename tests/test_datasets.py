@@ -5,6 +5,7 @@ from __future__ import annotations
 import inspect
 import math
 import pickle
+import re
 from pathlib import Path
 
 import cv2
@@ -14,7 +15,7 @@ import pytest
 from logpolar_track.bench import run_one
 from logpolar_track.datasets import discover, load_ground_truth
 from logpolar_track.errors import InputError, UsageError
-from logpolar_track.evaluate import rotated_box_corners
+from logpolar_track.evaluate import GroundTruthError, rotated_box_corners
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
@@ -477,3 +478,16 @@ def test_benchmark_ground_truth_without_its_frames_is_read_with_its_flags(tmp_pa
     (tmp_path / "alone" / "got10k" / "GOT-10k_Val_000001" / "absence.label").unlink()
     with pytest.raises(UsageError, match=r"is GOT-10k's, but no absence\.label is beside it"):
         load_ground_truth(tmp_path / "alone" / "got10k" / "GOT-10k_Val_000001" / "groundtruth.txt")
+
+
+def test_a_sequence_with_no_box_to_start_from_is_named(tmp_path):
+    """A LaSOT sequence flagged absent on every frame (or an OTB file of NaN lines) stops discovery, as before, but
+    the error named no file: in a root of many sequences the user could not tell which."""
+    seq = _lasot(tmp_path, "cat-1", ["11,21,10,6", "12,21,10,6"], [1, 0], [0, 1])
+    with pytest.raises(GroundTruthError, match=re.escape(
+            f"'{seq / 'groundtruth.txt'}' has no box to start the tracker from on any of the 2 images: every line is "
+            f"NaN, empty (w or h <= 0), or flagged absent by full_occlusion.txt or out_of_view.txt")):
+        discover(tmp_path)
+    otb = _otb(tmp_path / "otb", "walk", 2, ["NaN,NaN,NaN,NaN", "1,1,0,5"])
+    with pytest.raises(GroundTruthError, match=re.escape(f"'{otb / 'groundtruth_rect.txt'}' has no box to start")):
+        discover(otb)

@@ -510,6 +510,8 @@ def _trackingnet_video(folder: Path) -> Path | None:
 _OTB_FRAME_FOLDER = "img"
 _VOT_FRAME_FOLDERS = ("imgs", "color")
 _FRAME_FOLDERS = frozenset((_OTB_FRAME_FOLDER, *_VOT_FRAME_FOLDERS))
+#: A TrackingNet split's folders, read through :func:`_trackingnet_split`: never searched for sequences of their own.
+_TRACKINGNET_FOLDERS = frozenset(("frames", "anno", "zips"))
 
 
 def sequences_in(folder: Path) -> list[Sequence]:
@@ -592,15 +594,18 @@ def discover(path, unread: list[tuple[Path, str]] | None = None) -> list[Sequenc
 
 
 def _discover(folder: Path, depth: int, unread: list[tuple[Path, str]]) -> list[Sequence]:
-    if _is_trackingnet_split(folder):
-        # Its frames/<video> folders are sequences read with anno/: not searched one by one.
+    split = _is_trackingnet_split(folder)
+    if split:
+        # Its frames/<video> folders are sequences read with anno/: not searched one by one, nor anno/ and zips/. Its
+        # other folders are searched as any folder's are: OTB or VOT sequences beside a frames/ and an anno/ folder
+        # of the user's own were lost without a word.
         found, skipped = _trackingnet_split(folder)
         unread.extend(skipped)
-        return found
-    found = sequences_in(folder)
-    if found and found[0].frame_files is not None:
+    else:
+        found = sequences_in(folder)
+    if found and found[0].frame_files is not None and not split:
         return found  # an image sequence's folder: what is below it are its frames
-    if found:
+    if found and not split:
         # Videos with their ground truth, as lptrack samples writes them: those without are said to be skipped, and
         # the folders beside them searched, as 'lptrack run' searches a folder.
         with_truth = {s.path for s in found}
@@ -609,11 +614,12 @@ def _discover(folder: Path, depth: int, unread: list[tuple[Path, str]]) -> list[
         unread.extend((video, f"no {video.name[:-len(video.suffix)]}.gt.csv ground truth beside it")
                       for video in lacking)
     if depth > 0:
+        skip = _FRAME_FOLDERS | _TRACKINGNET_FOLDERS if split else _FRAME_FOLDERS
         for sub in sorted((p for p in folder.iterdir()
-                           if p.is_dir() and not p.name.startswith(".") and p.name not in _FRAME_FOLDERS),
+                           if p.is_dir() and not p.name.startswith(".") and p.name not in skip),
                           key=_natural_key):
             found.extend(_discover(sub, depth - 1, unread))
-    if not found:
+    if not found and not split:
         # Said only where nothing was found below: a stray image or video beside sequence folders is no sequence.
         lacking = _what_it_lacks(folder)
         if lacking is None and depth == 0 and _has_subfolders(folder):

@@ -491,3 +491,17 @@ def test_a_sequence_with_no_box_to_start_from_is_named(tmp_path):
     otb = _otb(tmp_path / "otb", "walk", 2, ["NaN,NaN,NaN,NaN", "1,1,0,5"])
     with pytest.raises(GroundTruthError, match=re.escape(f"'{otb / 'groundtruth_rect.txt'}' has no box to start")):
         discover(otb)
+
+
+def test_a_folder_of_sequences_with_a_frames_and_an_anno_folder_is_still_searched(tmp_path):
+    """A folder holding frames/ and anno/ is read as a TrackingNet split; its other folders were then not searched,
+    so OTB sequences beside a frames/ and an anno/ folder of the user's own, found before TrackingNet was read,
+    were lost without a word. They are searched as in any folder; the split's frames/, anno/ and zips/ are not."""
+    root = tmp_path / "mine"
+    (root / "frames").mkdir(parents=True)
+    (root / "anno").mkdir()
+    _otb(root, "walk", 3, ["11,21,10,6"] * 3)
+    unread: list = []
+    assert [(s.name, s.kind) for s in discover(root, unread)] == [("walk", "otb")] and unread == []
+    _trackingnet(root, "a3Ck0U-5_EE_0", 3, ["10,20,10,6"] * 3)
+    assert [(s.name, s.kind) for s in discover(root)] == [("a3Ck0U-5_EE_0", "trackingnet"), ("walk", "otb")]

@@ -166,8 +166,8 @@ class Sequence:
             For a video: only image sequences are played backwards (a video would have to be decoded whole).
         """
         if self.frame_files is None:
-            raise UsageError(f"'{self.name}' is a video ({self.path.name}); only image sequences (OTB, VOT, UAV123 "
-                             "folders) can be played backwards")
+            raise UsageError(f"'{self.name}' is a video ({self.path.name}); only image sequences (OTB, VOT, UAV123, "
+                             "LaSOT, GOT-10k, TrackingNet) can be played backwards")
         gt = self.gt.reversed()  # one row per frame already (see _image_sequence)
         return replace(self, name=f"{self.name}-backwards", gt=gt, roi=gt.initial_roi(), start=gt.first_valid,
                        frame_files=self.frame_files[::-1], played_backwards=True)
@@ -216,8 +216,8 @@ class Sequence:
         if passes == 1:
             return self
         if self.frame_files is None:
-            raise UsageError(f"'{self.name}' is a video ({self.path.name}); only image sequences (OTB, VOT, UAV123 "
-                             "folders) can be played there and back")
+            raise UsageError(f"'{self.name}' is a video ({self.path.name}); only image sequences (OTB, VOT, UAV123, "
+                             "LaSOT, GOT-10k, TrackingNet) can be played there and back")
         rows = there_and_back_rows(self.start, len(self.frame_files), passes)
         return replace(self, name=f"{self.name}-passes{passes}", gt=self.gt.there_and_back(self.start, passes),
                        start=0, n_frames=len(rows), frame_files=tuple(self.frame_files[i] for i in rows),

@@ -738,7 +738,8 @@ def test_bench_plays_only_image_sequences_backwards_or_there_and_back(dataset, f
     res = _run("bench", "--dataset", dataset, "--trackers", "fixed", *flag)
     assert res.exit_code == 2 and res.stdout == ""
     assert res.stderr.strip().splitlines() == [
-        f"lptrack: error: {flag[0]} plays image sequences only (OTB, VOT, UAV123 folders), and alpha.avi is a "
+        f"lptrack: error: {flag[0]} plays image sequences only (OTB, VOT, UAV123, LaSOT, GOT-10k, TrackingNet), and "
+        f"alpha.avi is a "
         "video; give --dataset with such folders"]
 
 

@@ -168,7 +168,8 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
         if found is None:
             raise UsageError("no --dataset given, and no sample_videos/ folder in the current folder or in the "
                              "source checkout lptrack runs from (a wheel install has none); give --dataset DIR "
-                             "(lptrack samples, OTB, VOT or UAV123 folders), or run it in the checkout")
+                             "(lptrack samples, OTB, VOT, UAV123, LaSOT, GOT-10k or TrackingNet folders), or run it "
+                             "in the checkout")
         datasets = (found,)
     names, skipped = _runnable_trackers(trackers)
     tuning = parse_param_options(params, names, [name for name, _ in skipped])
@@ -177,8 +178,8 @@ def bench(datasets: tuple[Path, ...], trackers: str | None, params: tuple[str, .
     for flag, wanted in (("--backwards", backwards), ("--passes", passes > 1)):
         videos = [s.path.name for s in sequences if s.frame_files is None] if wanted else []
         if videos:
-            raise UsageError(f"{flag} plays image sequences only (OTB, VOT, UAV123 folders), and {videos[0]} is a "
-                             "video; give --dataset with such folders")
+            raise UsageError(f"{flag} plays image sequences only (OTB, VOT, UAV123, LaSOT, GOT-10k, TrackingNet), and "
+                             f"{videos[0]} is a video; give --dataset with such folders")
     if backwards:
         sequences = [s.backwards() for s in sequences]
     sequences = [s.every(every).there_and_back(passes) for s in sequences]

@@ -378,10 +378,12 @@ def test_a_roi_angle_of_many_turns_tracks_as_its_angle_within_one(name):
 
 # MIL samples at random: its two runs below would differ whatever their frames.
 @pytest.mark.parametrize("name", [n for n in tracker_names() if n != "cv-mil"])
-def test_float_frames_beyond_0_to_255_track_as_clipped(name):
+@pytest.mark.parametrize("cx", [80, 0], ids=["inside", "over_the_edge"])
+def test_float_frames_beyond_0_to_255_track_as_clipped(name, cx):
     """Float32 frames are taken with values 0 to 255; NaN, infinities and values beyond are read as clipped to
     that (NaN as 0), channel by channel, rather than passed on: NaN reached lpcf's features as a garbage bin index
-    (IndexError)."""
+    (IndexError). Also where the ROI hangs over the frame's edge, whose samples beyond it read the frame's mean grey:
+    lpcf took that mean of the raw frame, NaN with one NaN pixel (fuzzing found it), and its init crashed."""
     frame = random_texture(120, 160, np.random.default_rng(0)).astype(np.float32)
     broken = frame.copy()
     broken[50:56, 70:76] = np.nan
@@ -391,7 +393,7 @@ def test_float_frames_beyond_0_to_255_track_as_clipped(name):
     broken[40:44, 60:64, 0] = np.nan  # one channel only: the others keep their values
     broken[45, 60:70, 2] = 1000.0
     clipped = np.clip(np.nan_to_num(broken, nan=0.0, posinf=255.0, neginf=0.0), 0, 255)
-    roi = Ellipse(80, 60, 20, 20, 0)
+    roi = Ellipse(cx, 60, 20, 20, 0)
     states = []
     for start, later in ((broken, broken), (clipped, clipped)):
         tracker = create_tracker(name)

@@ -93,7 +93,7 @@ from ..colour import ColourLikelihood
 from ..errors import UsageError
 from ..features import locally_normalised, patch_features
 from ..geometry import Ellipse, rotate_screen, wrap_degrees
-from ..images import to_gray
+from ..images import to_gray, within_0_255
 from ..logpolar import LogPolarGrid, PhaseCorrelator
 from ..refine import AppearanceSubspace, similarity_step
 from ..scale_filter import ScaleFilter
@@ -461,8 +461,10 @@ class LogPolarCorrelationTracker(SimilarityTracker):
         #: The colour-to-grey map the tracker sees frames through (``cv2.transform``'s ``(1, 4)`` matrix), or None for
         #: OpenCV's grey (see ``_GREY_CONTRAST_KEPT``).
         self.grey_matrix = self._grey_for(frame, first, roi) if _in_colour(frame) else None
-        # The frame's mean grey, without converting the frame; float frames keep their range.
-        means = cv2.mean(frame)
+        # The frame's mean grey, without converting a uint8 frame; float frames keep their range, within 0 to 255 as
+        # their grey is (a NaN, an infinity or 1e30 in a float frame made the fill NaN, and patches over the edge
+        # crashed the features with an IndexError).
+        means = cv2.mean(frame if frame.dtype == np.uint8 else within_0_255(frame))
         if self.grey_matrix is not None:
             self.fill = float(np.dot(means[:3], self.grey_matrix[0, :3]) + self.grey_matrix[0, 3])
         else:

@@ -139,7 +139,14 @@ class _OpenCVTracker(Tracker):
             raise NotStartedError("update() called before init(); start the tracker on a frame and a ROI first")
         frame = np.asarray(frame)
         check_frame(frame, self._frame_size, self._frame_layout)
-        ok, box = self._tracker.update(to_bgr(frame))
+        import cv2
+
+        try:
+            ok, box = self._tracker.update(to_bgr(frame))
+        except cv2.error:
+            # CSRT's box can leave a frame a few pixels high or wide, and its next crop is then empty (an assertion in
+            # copyMakeBorder): not found in this frame.
+            ok, box = False, (0, 0, 0, 0)
         box = tuple(float(v) for v in box)
         if not ok or box[2] <= 0 or box[3] <= 0 or not all(math.isfinite(v) for v in box):
             return False, TrackState(self._last.ellipse, self._last.scale, None, 0.0)

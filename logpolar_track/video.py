@@ -60,6 +60,13 @@ CODECS_BY_EXTENSION: dict[str, tuple[tuple[str, str], ...]] = {
     ".webm": (("VP80", ".webm"), ("MJPG", ".avi")),
 }
 
+#: Fewest pixels (width x height) of a frame written with MJPG; smaller ones go to the next codec (XVID in .avi).
+#: OpenCV's own MJPG encoder writes beyond its buffer on small frames (opencv/opencv#29112, #22420) and the process
+#: aborts ("free(): invalid next size", exit 134, no message, a hidden part file left behind): with OpenCV 5.1.0,
+#: frames of random noise 4x4, 2x8, 6x24 and 4x36 px did, none of 2 to 40 px a side above 144 pixels, so 32 x 32
+#: keeps a margin for other content. Found by fuzzing ``lptrack run`` on a 4x4 image sequence with ``-o out.avi``.
+MJPG_MIN_PIXELS = 32 * 32
+
 #: File extensions taken for videos (case-insensitive), the commonest first: searched for in input folders, beside a
 #: run CSV (``lptrack plot``) and in sequence folders.
 VIDEO_EXTENSIONS: tuple[str, ...] = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".ts",
@@ -1123,6 +1130,9 @@ class VideoWriter:
         for code, extension in CODECS_BY_EXTENSION[self.wanted_path.suffix.lower()]:
             target = self.wanted_path.with_suffix(extension) if extension != self.wanted_path.suffix.lower() \
                 else self.wanted_path
+            if code == "MJPG" and width * height < MJPG_MIN_PIXELS:
+                tried.append(f"{code}{extension} (a frame under {MJPG_MIN_PIXELS} pixels)")
+                continue
             if target != self.wanted_path and target.exists() and not self.overwrite:
                 tried.append(f"{code}{extension} ({target.name} exists)")
                 continue

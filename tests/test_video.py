@@ -393,6 +393,32 @@ def test_writer_round_trip_keeps_count_size_and_fps(tiny_video, tmp_path, name, 
     assert fps == pytest.approx(29.97, abs=0.01)
 
 
+def test_writer_never_gives_a_small_frame_to_mjpg(tmp_path):
+    """OpenCV's MJPG encoder writes beyond its buffer on small frames (opencv/opencv#29112): ``lptrack run`` of a 4x4
+    image sequence with ``-o out.avi`` aborted (``free(): invalid next size``, exit 134, a part file left behind;
+    found by fuzzing). Such a video is written with XVID. Run in a child process, as the abort would end pytest's."""
+    import subprocess
+    import textwrap
+
+    import logpolar_track
+
+    code = textwrap.dedent(f"""
+        import numpy as np
+        from logpolar_track.video import VideoWriter
+        for width, height in ((4, 4), (2, 8), (6, 24), (4, 36)):
+            with VideoWriter(r"{tmp_path}" + f"/out{{width}}x{{height}}.avi", 25.0) as writer:
+                for i in range(3):
+                    writer.write(np.random.default_rng(i).integers(0, 256, (height, width, 3), dtype=np.uint8))
+            print(writer.fourcc)
+    """)
+    env = dict(os.environ, PYTHONPATH=str(Path(logpolar_track.__file__).parents[1]))
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env)
+    assert result.returncode == 0, result.stderr[-300:]
+    assert result.stdout.split() == ["XVID"] * 4
+    assert [count_frames(tmp_path / f"out{size}.avi")[:2] for size in ("4x4", "2x8", "6x24", "4x36")] == \
+        [(3, (4, 4)), (3, (2, 8)), (3, (6, 24)), (3, (4, 36))]
+
+
 def test_a_stop_while_the_writer_opens_leaves_nothing(tmp_path, monkeypatch):
     """A stop signal (raised as an exception by lptrack's handlers) can land between the OpenCV writer opening and
     its encoding thread starting; abort() then had a writer without an encoder, failed with AttributeError, and

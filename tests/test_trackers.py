@@ -687,6 +687,23 @@ def test_csrt_on_a_frame_a_few_pixels_high_reports_lost_rather_than_raising():
     assert lost > 0  # the case the test is about happened (20 of the 60 frames with OpenCV 5.1.0)
 
 
+@pytest.mark.parametrize("name", [n for n in tracker_names() if n.startswith("cv-")])
+def test_opencv_trackers_report_a_centre_within_the_frame(name):
+    """An object sliding out of the view on the right: OpenCV's box may move part-way out of the frame, and its
+    reported centre was beyond the outermost pixel centre (CSRT: 159.5 in a 160 px frame, KCF up to 5.5 px beyond
+    in fuzzing); it is reported on the edge, as lpcf reports an object leaving the view."""
+    width, height = 160, 120
+    background = np.full((height, width, 3), 90, np.uint8)
+    texture = random_texture(41, 41, np.random.default_rng(0))
+    roi = Ellipse.circle(width - 30.0, 60.0, 15.0)
+    frames = [render_frame(background, texture, roi, Pose(width - 30.0 + 4 * i, 60.0, 1.0, 0.0)) for i in range(16)]
+    tracker = create_tracker(name)
+    tracker.init(frames[0], roi)
+    for frame in frames[1:]:
+        ok, state = tracker.update(frame)
+        assert 0.0 <= state.ellipse.cx <= width - 1 and 0.0 <= state.ellipse.cy <= height - 1
+
+
 def test_the_contrib_hint_follows_the_installed_wheels(monkeypatch):
     """Both OpenCV wheels installed (lptrack reinstalled after the swap): uninstalling only the plain one, as the
     swap says, would leave cv2 broken; the hint says to reinstall the contrib one alone."""

@@ -15,7 +15,8 @@ The contrib wheel replaces the plain one (they must not be installed together: u
 OpenCV's trackers follow an axis-aligned box and measure no rotation. The adapters start them on the ROI's
 axis-aligned bounding box (rounded to whole pixels, as OpenCV takes integer boxes) and report, per frame, the
 ROI's own ellipse (its angle kept) moved by as much as the box's centre moved and scaled by
-``scale = sqrt(w*h) / sqrt(w0*h0)`` against the initial box, so the first state is the ROI itself;
+``scale = sqrt(w*h) / sqrt(w0*h0)`` against the initial box, so the first state is the ROI itself (a centre beyond
+the frame's outermost pixel centres is reported on them, as lpcf reports an object leaving the view);
 ``rotation_deg = None``; and ``score`` 1.0 when OpenCV says ok, else 0.0 (OpenCV gives no confidence). MIL says
 ok even when the target is gone; KCF and CSRT can report a loss. ``init`` seeds OpenCV's random number
 generator and the C library's ``rand()`` (keyword ``seed``, default 0): MIL draws its samples with the first and its
@@ -160,6 +161,11 @@ class _OpenCVTracker(Tracker):
         scale = math.sqrt(w * h) / self._size0
         cx = self._roi.cx + (x + w / 2.0) - (x0 + w0 / 2.0)
         cy = self._roi.cy + (y + h / 2.0) - (y0 + h0 / 2.0)
+        # A centre beyond the frame is reported on its edge, as lpcf reports an object leaving the view: KCF's and
+        # CSRT's boxes may move part-way out of the frame (a tracked centre 5.5 px beyond the right edge of a 531 px
+        # frame), and the centre of a ROI cut by the edge is off its box's by up to half the box.
+        width, height = self._frame_size
+        cx, cy = min(max(cx, 0.0), width - 1.0), min(max(cy, 0.0), height - 1.0)
         return TrackState(self._roi.moved(cx, cy, scale), scale, None, score)
 
 

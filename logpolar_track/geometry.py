@@ -320,6 +320,9 @@ def as_ellipse(roi) -> Ellipse:
                            f"inside it") from None
     if values is None or values.ndim != 1:
         raise RoiError(f"{accepted}; got {type(roi).__name__} {roi!r:.60}")
+    if any(isinstance(v, (bool, np.bool_)) for v in (roi.tolist() if isinstance(roi, np.ndarray) else roi)):
+        # As an Ellipse refuses one: True passed as 1 (a flag given where a number was meant).
+        raise RoiError(f"{accepted}; got {roi!r:.60}, which holds True or False")
     if len(values) == 4:
         raise RoiError(f"a ROI of 4 numbers {_numbers(values)} looks like an OpenCV box (x, y, w, h); lptrack takes a "
                        f"circle or an ellipse: logpolar_track.geometry.ellipse_in_box(x, y, w, h) is the one inside it")

@@ -246,6 +246,8 @@ def test_as_ellipse_takes_what_a_python_user_passes(roi):
     ([[300, 250, 64]], "a ROI is an Ellipse, a string"),
     (object(), "a ROI is an Ellipse, a string"),
     ({"cx": 1}, "a ROI is an Ellipse, a string"),
+    ((True, 30, 10), "or those 3 or 5 numbers; got (True, 30, 10), which holds True or False"),  # was cx 1 (fuzzing)
+    (np.array([True, True, True]), "which holds True or False"),
     (((300, 250), (120, 70), 20.0), "looks like an OpenCV RotatedRect ((cx, cy), (w, h), angle), whose angle is "
                                     "clockwise on screen: logpolar_track.geometry.ellipse_from_opencv(rect)"),
 ])

@@ -386,6 +386,17 @@ def _absent(flags: list[np.ndarray]) -> np.ndarray:
 _LASOT_FLAGS = ("full_occlusion.txt", "out_of_view.txt")
 
 
+def _has_lasot_flags(folder: Path) -> bool:
+    """Whether both of LaSOT's flag files are in ``folder``."""
+    return all((folder / name).is_file() for name in _LASOT_FLAGS)
+
+
+def _first_box_only(whose: str) -> str:
+    """What a test split's ground truth is, said of ``whose`` ("GOT-10k's test split"), after "it has"."""
+    return (f"one line, the first frame's box ({whose}, whose ground truth is kept for its evaluation server): nothing "
+            f"to score")
+
+
 def _lasot_flags(folder: Path) -> tuple[dict, np.ndarray]:
     """A LaSOT sequence folder's flag files (``{path: values}``) and the frames they mark absent."""
     flags = {folder / name: _read_flags(folder / name) for name in _LASOT_FLAGS}
@@ -449,8 +460,7 @@ def _got10k_unscored(folder: Path) -> str | None:
     """Why a GOT-10k sequence folder (frames + ``groundtruth.txt``) cannot be scored, or None if it can."""
     gt_path = folder / "groundtruth.txt"
     if _one_line(gt_path):
-        return ("groundtruth.txt with one line, the first frame's box (GOT-10k's test split, whose ground truth is "
-                "kept for its evaluation server): nothing to score")
+        return "groundtruth.txt with " + _first_box_only("GOT-10k's test split")
     if not (folder / "absence.label").is_file():
         return ("GOT-10k's groundtruth.txt and images but no absence.label beside them, which says the frames "
                 "where the target is absent")
@@ -487,8 +497,7 @@ def _trackingnet_split(folder: Path) -> tuple[list[Sequence], list[tuple[Path, s
         else:
             found.append(_image_sequence(name, "trackingnet", frames / name, boxes[name], files, one_based=False))
     if first_only:
-        why = ("one line, the first frame's box (TrackingNet's test split, whose ground truth is kept for its "
-               "evaluation server): nothing to score")
+        why = _first_box_only("TrackingNet's test split")
         if found or unread:
             unread.extend((frames / name, f"{anno / (name + '.txt')} of {why}") for name in first_only)
         else:
@@ -537,7 +546,7 @@ def sequences_in(folder: Path) -> list[Sequence]:
         return found
     # LaSOT: img/ + groundtruth.txt + the absence flags.
     vot = folder / "groundtruth.txt"
-    if img and vot.is_file() and all((folder / name).is_file() for name in _LASOT_FLAGS):
+    if img and vot.is_file() and _has_lasot_flags(folder):
         return [_lasot_sequence(folder, img)]
     # GOT-10k: groundtruth.txt + absence.label + frames in the folder (the test split's, one line: not scored).
     if vot.is_file() and _is_got10k(folder):
@@ -650,8 +659,7 @@ def _what_it_lacks(folder: Path) -> str | None:
             return _got10k_unscored(folder)
         anno = _trackingnet_video(folder)
         if anno is not None:
-            return (f"{anno} of one line, the first frame's box (TrackingNet's test split, whose ground truth is kept "
-                    f"for its evaluation server): nothing to score") if _images_in(folder) else None
+            return f"{anno} of " + _first_box_only("TrackingNet's test split") if _images_in(folder) else None
         otb_frames = _images_in(folder / _OTB_FRAME_FOLDER)
         vot_frames = next((sub for sub in (folder, *(folder / n for n in _VOT_FRAME_FOLDERS)) if _images_in(sub)),
                           None)
@@ -718,7 +726,7 @@ def _flagged_sequence_folder(path: Path) -> tuple[str, Path] | None:
     ``groundtruth.txt``, or a TrackingNet ``anno/<video>.txt`` (``frames/<video>``, extracted or not), belongs to:
     its labels and coordinates' origin are known only with it. None for any other file."""
     folder = path.parent
-    if path.name == "groundtruth.txt" and all((folder / name).is_file() for name in _LASOT_FLAGS):
+    if path.name == "groundtruth.txt" and _has_lasot_flags(folder):
         return "lasot", folder
     if path.name == "groundtruth.txt" and _is_got10k(folder):
         return "got10k", folder
@@ -739,9 +747,8 @@ def _ground_truth_without_frames(path: Path, kind: str, folder: Path) -> GroundT
         A test split's file (its first frame's box only), or a GOT-10k one without ``absence.label``.
     """
     if _one_line(path):
-        raise UsageError(f"'{path}' has one line, the first frame's box (a test split's, whose ground truth is kept "
-                         f"for its evaluation server): nothing to score; give the ground truth of a sequence with a "
-                         f"box for every frame (a train or val split's)")
+        raise UsageError(f"'{path}' has " + _first_box_only("a test split's") + "; give the ground truth of a "
+                         "sequence with a box for every frame (a train or val split's)")
     if kind == "trackingnet":
         return read_box_text(path, source=kind, one_based=False)
     if kind == "got10k" and not (folder / "absence.label").is_file():
